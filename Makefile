@@ -1,0 +1,35 @@
+# `make demo` and `make test` work on a fresh machine: each creates .venv if missing,
+# installs torch 2.13.0 (CPU) before anything that depends on torch, then the project.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: demo test test-fast bench venv clean
+
+venv: $(STAMP)
+
+$(STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet torch==2.13.0
+	$(PY) -m pip install --quiet -e '.[train,test]'
+	touch $(STAMP)
+
+demo: $(STAMP)
+	$(PY) -m rocketdrl_ma.cli demo
+
+# The whole suite, slow-marked tests included: correctness is never skipped.
+test: $(STAMP)
+	$(PY) -m pytest -q -p no:cacheprovider tests
+
+# Everything but the tests marked slow, for quick local iteration.
+test-fast: $(STAMP)
+	$(PY) -m pytest -q -m "not slow" tests
+
+bench: $(STAMP)
+	$(PY) benchmarks/physics_speed.py
+	$(PY) benchmarks/fidelity.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info

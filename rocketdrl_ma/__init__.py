@@ -1,0 +1,1 @@
+"""rocketdrl-ma: multi-agent car football on PyBullet for reinforcement learning."""
