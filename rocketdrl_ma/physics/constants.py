@@ -71,6 +71,7 @@ WHEELS_FOR_ON_GROUND = 3
 THROTTLE_TORQUE_AMOUNT = 400.0  # per wheel, times mass: 4 wheels -> 1600 uu/s^2
 THROTTLE_TORQUE_CURVE = ((0.0, 1.0), (1400.0, 0.1), (1410.0, 0.0))
 BRAKE_ACCEL = 3500.0
+BRAKE_SLIP_SCALE = 113.73963  # 1/s: brake impulse per unit of wheel slip, before the brake clamp
 COAST_BRAKE_FACTOR = 0.15
 STOPPING_FORWARD_VEL = 25.0
 THROTTLE_DEADZONE = 0.001
@@ -123,6 +124,9 @@ AUTOFLIP_IMPULSE = 200.0
 AUTOFLIP_TORQUE = 50.0
 AUTOFLIP_NORM_Z_THRESH = math.sqrt(0.5)
 AUTOFLIP_ROLL_THRESH = 2.8
+AUTOFLIP_TIME = 0.4
+AUTOROLL_FORCE = 100.0
+AUTOROLL_TORQUE = 80.0
 
 # ---------------------------------------------------------------- air control (pitch, yaw, roll)
 CAR_TORQUE_SCALE = 2.0 * math.pi / 65536.0 * 1000.0

@@ -1,0 +1,470 @@
+"""Many soccar arenas in one PyBullet world, stepped together.
+
+Each arena sits at its own origin on a grid far enough apart that nothing crosses over; the floor
+and ceiling planes are shared. Every per-tick quantity is held as arrays over all cars (or balls)
+of all arenas, so the car model runs as one compiled kernel and a lone ``Arena`` is simply a batch
+of one. Rocket League units (uu) everywhere outside this module's PyBullet calls, which use metres.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pybullet as pb
+from numba import njit
+
+from . import constants as C
+from .arena_geometry import arena_mesh
+from .car_config import CarConfig, get_preset
+from .car_kernel import (CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER, CS_IS_DEMOED, CS_IS_SUPERSONIC, CS_ON_GROUND, CS_SIZE, boost_pad_tick,
+                         car_post_tick, car_pre_tick, interp)
+
+M_PER_UU = 1.0 / C.UU_PER_M
+ARENA_SPACING_UU = 20000.0  # arenas are ~8200 x 12000 uu; the gap keeps every body in its own arena
+ARENA_GRID_COLUMNS = 8
+_BALL_HIT_CURVE = np.array(C.BALL_HIT_SCALE_CURVE)
+_BUMP_GROUND = np.array(C.BUMP_VEL_CURVE_GROUND)
+_BUMP_AIR = np.array(C.BUMP_VEL_CURVE_AIR)
+_BUMP_UP = np.array(C.BUMP_UPWARD_VEL_CURVE)
+
+
+@njit(cache=True)
+def quats_to_mats(quats, out):
+    """(N, 4) xyzw quaternions to (N, 3, 3) rotation matrices."""
+    for i in range(quats.shape[0]):
+        x, y, z, w = quats[i, 0], quats[i, 1], quats[i, 2], quats[i, 3]
+        out[i, 0, 0] = 1 - 2 * (y * y + z * z)
+        out[i, 0, 1] = 2 * (x * y - z * w)
+        out[i, 0, 2] = 2 * (x * z + y * w)
+        out[i, 1, 0] = 2 * (x * y + z * w)
+        out[i, 1, 1] = 1 - 2 * (x * x + z * z)
+        out[i, 1, 2] = 2 * (y * z - x * w)
+        out[i, 2, 0] = 2 * (x * z - y * w)
+        out[i, 2, 1] = 2 * (y * z + x * w)
+        out[i, 2, 2] = 1 - 2 * (x * x + y * y)
+
+
+def mat_to_quat(m: np.ndarray) -> tuple[float, float, float, float]:
+    """Rotation matrix to an xyzw quaternion (Shepperd's method)."""
+    tr = m[0, 0] + m[1, 1] + m[2, 2]
+    if tr > 0:
+        s = math.sqrt(tr + 1.0) * 2
+        q = (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, 0.25 * s
+    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
+        s = math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2]) * 2
+        q = 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s, (m[2, 1] - m[1, 2]) / s
+    elif m[1, 1] > m[2, 2]:
+        s = math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2]) * 2
+        q = (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s, (m[0, 2] - m[2, 0]) / s
+    else:
+        s = math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1]) * 2
+        q = (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s, (m[1, 0] - m[0, 1]) / s
+    n = math.sqrt(sum(c * c for c in q))
+    return tuple(c / n for c in q)
+
+
+class _CarSlot:
+    """Bookkeeping of one car body; its per-tick numbers live in the batch arrays at ``index``."""
+
+    def __init__(self, car_id: int, arena: int, team: int, config: CarConfig, body: int):
+        self.car_id, self.arena, self.team, self.config, self.body = car_id, arena, team, config, body
+        self.index = -1
+        self.last_ball_hit_tick = -10
+        self.cooldown_until: dict[int, int] = {}  # other car id -> tick when bumps may happen again
+
+
+class ArenaBatch:
+    """``n_arenas`` independent soccar arenas in one PyBullet client, stepped by one ``stepSimulation``.
+
+    ``batch.arenas[i]`` are ``Arena`` views with the single-arena API; ``batch.step(ticks)`` advances all.
+    """
+
+    def __init__(self, n_arenas: int = 1, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
+        from .arena import Arena  # the view class; imported here to keep module dependencies one-way
+
+        if not isinstance(n_arenas, int) or n_arenas < 1:
+            raise ValueError(f"n_arenas: must be an int >= 1, got {n_arenas!r}")
+        if tick_rate != C.TICK_RATE_HZ:
+            raise ValueError(f"tick_rate: only {C.TICK_RATE_HZ} Hz is supported (the game's rate), got {tick_rate!r}")
+        self.n_arenas = n_arenas
+        self.tick_rate = tick_rate
+        self.dt = 1.0 / tick_rate
+        self.tick_count = 0
+        self.rng = np.random.default_rng(seed)
+        self.client = pb.connect(pb.DIRECT)
+        cid = self.client
+        pb.setGravity(0, 0, C.GRAVITY_Z * M_PER_UU, physicsClientId=cid)
+        pb.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=0, numSolverIterations=10,
+                                     deterministicOverlappingPairs=1, physicsClientId=cid)
+        self.origins = np.array([[(k % ARENA_GRID_COLUMNS) * ARENA_SPACING_UU,
+                                  (k // ARENA_GRID_COLUMNS) * ARENA_SPACING_UU, 0.0] for k in range(n_arenas)])
+        self._build_static_world()
+        self._ball_bodies = [self._make_ball(k) for k in range(n_arenas)]
+        self.ball_pos = np.zeros((n_arenas, 3))
+        self.ball_vel = np.zeros((n_arenas, 3))
+        self.ball_ang_vel = np.zeros((n_arenas, 3))
+        self.ball_frozen = np.zeros(n_arenas, dtype=bool)
+        self.pad_timer = np.zeros((n_arenas, len(C.BOOST_PAD_POSITIONS)))
+        self._slots: list[_CarSlot] = []
+        self._slot_by_body: dict[int, _CarSlot] = {}
+        self._ball_arena = {b: k for k, b in enumerate(self._ball_bodies)}
+        self._next_car_id = 0
+        self._rebuild_car_arrays()
+        self._state_fresh = False
+        self.events: list[tuple] = []  # (tick, kind, ...) since the last clear_events()
+        self.arenas = [Arena._view(self, k) for k in range(n_arenas)]
+        for k in range(n_arenas):
+            self.set_ball(k, np.array([0.0, 0.0, C.BALL_REST_Z]), np.zeros(3), np.zeros(3))
+
+    # ------------------------------------------------------------------ construction
+    def _build_static_world(self) -> None:
+        cid = self.client
+        verts, idx = arena_mesh()
+        shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=(verts * M_PER_UU).tolist(),
+                                        indices=idx.reshape(-1).tolist(), flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
+                                        physicsClientId=cid)
+        floor = pb.createCollisionShape(pb.GEOM_PLANE, planeNormal=[0, 0, 1], physicsClientId=cid)
+        ceiling = pb.createCollisionShape(pb.GEOM_PLANE, planeNormal=[0, 0, -1], physicsClientId=cid)
+        self._static_bodies = [
+            pb.createMultiBody(0, floor, basePosition=[0, 0, 0], physicsClientId=cid),
+            pb.createMultiBody(0, ceiling, basePosition=[0, 0, C.ARENA_HEIGHT * M_PER_UU], physicsClientId=cid)]
+        for origin in self.origins:
+            self._static_bodies.append(
+                pb.createMultiBody(0, shape, basePosition=(origin * M_PER_UU).tolist(), physicsClientId=cid))
+        # Bullet multiplies both bodies' materials; the arena's 1.0 lets each body's own value through.
+        self._static_set = set(self._static_bodies)
+        for body in self._static_bodies:
+            pb.changeDynamics(body, -1, lateralFriction=1.0, restitution=1.0, rollingFriction=0.0,
+                              spinningFriction=0.0, physicsClientId=cid)
+
+    def _make_ball(self, arena: int) -> int:
+        cid = self.client
+        shape = pb.createCollisionShape(pb.GEOM_SPHERE, radius=C.BALL_RADIUS * M_PER_UU, physicsClientId=cid)
+        body = pb.createMultiBody(C.BALL_MASS, shape, basePosition=(self.origins[arena] * M_PER_UU).tolist(),
+                                  useMaximalCoordinates=True, physicsClientId=cid)
+        pb.changeDynamics(body, -1, lateralFriction=C.BALL_FRICTION, restitution=C.BALL_RESTITUTION,
+                          linearDamping=C.BALL_DRAG, angularDamping=0.0, rollingFriction=0.0, spinningFriction=0.0,
+                          activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, physicsClientId=cid)
+        return body
+
+    def add_car(self, arena: int, team: int, config: CarConfig | str) -> int:
+        if team not in (0, 1):
+            raise ValueError(f"team: must be 0 (blue) or 1 (orange), got {team!r}")
+        cfg = get_preset(config) if isinstance(config, str) else config
+        cid = self.client
+        half = [s * 0.5 * M_PER_UU for s in cfg.hitbox_size]
+        shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half,
+                                        collisionFramePosition=[o * M_PER_UU for o in cfg.hitbox_offset],
+                                        physicsClientId=cid)
+        start = self.origins[arena] + np.array([0.0, 0.0, C.CAR_SPAWN_REST_Z])
+        body = pb.createMultiBody(C.CAR_MASS, shape, basePosition=(start * M_PER_UU).tolist(),
+                                  useMaximalCoordinates=True, physicsClientId=cid)
+        self._set_car_dynamics(body, cfg)
+        slot = _CarSlot(self._next_car_id, arena, team, cfg, body)
+        self._next_car_id += 1
+        self._state_fresh = False  # the arrays are rebuilt from the bodies
+        self._read_state()
+        self._slots.append(slot)
+        self._slot_by_body[body] = slot
+        old = self._snapshot_car_arrays()
+        self._rebuild_car_arrays(old)
+        self.cs[slot.index, CS_BOOST] = C.BOOST_SPAWN_AMOUNT
+        self._read_state()
+        return slot.car_id
+
+    def _set_car_dynamics(self, body: int, cfg: CarConfig) -> None:
+        # Restitution 0 makes car-ball hits inelastic as in the game; Bullet can't set materials per pair.
+        pb.changeDynamics(body, -1, mass=C.CAR_MASS, localInertiaDiagonal=cfg.inertia_diag.tolist(),
+                          lateralFriction=C.CAR_WORLD_FRICTION, restitution=0.0, linearDamping=0.0,
+                          angularDamping=0.0, rollingFriction=0.0, spinningFriction=0.0,
+                          activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, physicsClientId=self.client)
+
+    def remove_car(self, car_id: int) -> None:
+        slot = self._slot(car_id)
+        self._read_state()
+        old = self._snapshot_car_arrays()
+        pb.removeBody(slot.body, physicsClientId=self.client)
+        self._slots.remove(slot)
+        del self._slot_by_body[slot.body]
+        for other in self._slots:
+            other.cooldown_until.pop(car_id, None)
+        self._rebuild_car_arrays(old)
+
+    def _snapshot_car_arrays(self) -> dict[int, tuple]:
+        return {s.car_id: (self.cs[s.index].copy(), self.controls[s.index].copy())
+                for s in self._slots if s.index >= 0}
+
+    def _rebuild_car_arrays(self, old: dict[int, tuple] | None = None) -> None:
+        n = len(self._slots)
+        self.car_pos = np.zeros((n, 3))
+        self.car_rot = np.zeros((n, 3, 3))
+        self.car_quat = np.zeros((n, 4))
+        self.car_vel = np.zeros((n, 3))
+        self.car_ang_vel = np.zeros((n, 3))
+        self.controls = np.zeros((n, 8))
+        self.cs = np.zeros((n, CS_SIZE))
+        self.car_arena = np.array([s.arena for s in self._slots], dtype=np.int64)
+        self.car_team = np.array([s.team for s in self._slots], dtype=np.int64)
+        self.car_active = np.ones(n, dtype=np.bool_)
+        self.pad_picked = np.full(n, -1, dtype=np.int64)
+        wheels = [s.config.wheel_table() for s in self._slots]
+        self.wheel_conn = np.array([w["connection"] for w in wheels]).reshape(n, 4, 3)
+        self.wheel_rest = np.array([w["rest_length"] for w in wheels]).reshape(n, 4)
+        self.wheel_radius = np.array([w["radius"] for w in wheels]).reshape(n, 4)
+        self.wheel_ray_len = np.array([w["ray_length"] for w in wheels]).reshape(n, 4)
+        self.wheel_is_front = np.array([w["is_front"] for w in wheels], dtype=np.bool_).reshape(n, 4)
+        self.inv_inertia = np.array([1.0 / (s.config.inertia_diag * C.UU_PER_M**2) for s in self._slots]).reshape(n, 3)
+        self.three_wheel = np.array([s.config.three_wheel for s in self._slots], dtype=np.bool_)
+        for k, s in enumerate(self._slots):
+            s.index = k
+            if old and s.car_id in old:
+                self.cs[k], self.controls[k] = old[s.car_id]
+        self._state_fresh = False
+
+    def _slot(self, car_id: int) -> _CarSlot:
+        for s in self._slots:
+            if s.car_id == car_id:
+                return s
+        raise ValueError(f"car: no car with id {car_id} in this batch")
+
+    # ------------------------------------------------------------------ state I/O (uu <-> metres)
+    def _read_state(self) -> None:
+        if self._state_fresh:
+            return
+        cid = self.client
+        for k, body in enumerate(self._ball_bodies):
+            pos, _ = pb.getBasePositionAndOrientation(body, physicsClientId=cid)
+            lin, ang = pb.getBaseVelocity(body, physicsClientId=cid)
+            self.ball_pos[k] = pos
+            self.ball_vel[k] = lin
+            self.ball_ang_vel[k] = ang
+        self.ball_pos *= C.UU_PER_M
+        self.ball_pos -= self.origins
+        self.ball_vel *= C.UU_PER_M
+        for s in self._slots:
+            pos, quat = pb.getBasePositionAndOrientation(s.body, physicsClientId=cid)
+            lin, ang = pb.getBaseVelocity(s.body, physicsClientId=cid)
+            k = s.index
+            self.car_pos[k] = pos
+            self.car_quat[k] = quat
+            self.car_vel[k] = lin
+            self.car_ang_vel[k] = ang
+        if self._slots:
+            self.car_pos *= C.UU_PER_M
+            self.car_pos -= self.origins[self.car_arena]
+            self.car_vel *= C.UU_PER_M
+            quats_to_mats(self.car_quat, self.car_rot)
+        self._state_fresh = True
+
+    def _write_car_velocities(self) -> None:
+        cid = self.client
+        vel = (self.car_vel * M_PER_UU).tolist()
+        ang = self.car_ang_vel.tolist()
+        for s in self._slots:
+            if self.car_active[s.index] and not self.cs[s.index, CS_IS_DEMOED]:
+                pb.resetBaseVelocity(s.body, vel[s.index], ang[s.index], physicsClientId=cid)
+
+    def _write_ball(self, k: int, position: bool = False) -> None:
+        cid = self.client
+        body = self._ball_bodies[k]
+        if position:
+            pb.resetBasePositionAndOrientation(body, ((self.ball_pos[k] + self.origins[k]) * M_PER_UU).tolist(),
+                                               (0, 0, 0, 1), physicsClientId=cid)
+        pb.resetBaseVelocity(body, (self.ball_vel[k] * M_PER_UU).tolist(), self.ball_ang_vel[k].tolist(),
+                             physicsClientId=cid)
+
+    def set_ball(self, arena: int, pos: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
+        self._read_state()
+        self.ball_pos[arena], self.ball_vel[arena], self.ball_ang_vel[arena] = pos, vel, ang_vel
+        # Like the game, a ball placed at rest hangs where it is until something touches it.
+        self.ball_frozen[arena] = not (np.any(vel) or np.any(ang_vel))
+        self._write_ball(arena, position=True)
+
+    def set_car(self, car_id: int, pos: np.ndarray, rot: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
+        self._read_state()
+        s = self._slot(car_id)
+        k = s.index
+        world = (pos + self.origins[s.arena]) * M_PER_UU
+        pb.resetBasePositionAndOrientation(s.body, world.tolist(), mat_to_quat(rot), physicsClientId=self.client)
+        pb.resetBaseVelocity(s.body, (vel * M_PER_UU).tolist(), ang_vel.tolist(), physicsClientId=self.client)
+        self.car_pos[k], self.car_rot[k], self.car_vel[k], self.car_ang_vel[k] = pos, rot, vel, ang_vel
+        self.car_quat[k] = mat_to_quat(rot)
+
+    # ------------------------------------------------------------------ the tick
+    def step(self, ticks: int = 1) -> None:
+        if not isinstance(ticks, (int, np.integer)) or ticks < 0:
+            raise ValueError(f"ticks: must be an int >= 0, got {ticks!r}")
+        cid = self.client
+        for _ in range(ticks):
+            self._read_state()
+            if self._slots:
+                car_pre_tick(self.car_pos, self.car_rot, self.car_vel, self.car_ang_vel, self.controls,
+                             self.wheel_conn, self.wheel_rest, self.wheel_radius, self.wheel_ray_len,
+                             self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
+                             self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
+                self._write_car_velocities()
+            for k in np.flatnonzero(self.ball_frozen):
+                # Cancel this tick's gravity so the frozen ball stays exactly where it is.
+                self.ball_vel[k] = (0.0, 0.0, -C.GRAVITY_Z * self.dt)
+                self._write_ball(k, position=True)
+            pb.stepSimulation(physicsClientId=cid)
+            self.tick_count += 1
+            self._state_fresh = False
+            self._read_state()
+            self._post_tick()
+
+    def _post_tick(self) -> None:
+        frozen = self.ball_frozen
+        if frozen.any():
+            self.ball_vel[frozen] = 0.0
+            self.ball_ang_vel[frozen] = 0.0
+        contacts = pb.getContactPoints(physicsClientId=self.client)
+        ball_dirty = np.zeros(self.n_arenas, dtype=bool)
+        car_pairs = set()
+        for c in contacts:
+            a, b = c[1], c[2]
+            if a in self._ball_arena or b in self._ball_arena:
+                ball, other = (a, b) if a in self._ball_arena else (b, a)
+                slot = self._slot_by_body.get(other)
+                if slot is not None:
+                    k = self._ball_arena[ball]
+                    if self.ball_frozen[k]:
+                        self.ball_frozen[k] = False
+                    self._ball_hit(slot, k)
+                    ball_dirty[k] = True
+            elif a in self._slot_by_body and b in self._slot_by_body:
+                car_pairs.add((min(a, b), max(a, b), c[5], c[6]))
+            elif a in self._static_set or b in self._static_set:
+                # The hitbox touching the arena drives auto-flip and auto-roll next tick.
+                car, sign = (a, 1.0) if a in self._slot_by_body else (b, -1.0)
+                slot = self._slot_by_body.get(car)
+                if slot is not None:
+                    self.cs[slot.index, CS_BODY_CONTACT] = 1.0
+                    self.cs[slot.index, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3] = np.multiply(c[7], sign)
+        seen = set()
+        for a, b, pos_on_a, pos_on_b in car_pairs:
+            if (a, b) in seen:
+                continue
+            seen.add((a, b))
+            sa, sb = self._slot_by_body[a], self._slot_by_body[b]
+            self._car_hit(sa, sb, np.array(pos_on_a) * C.UU_PER_M - self.origins[sa.arena])
+            self._car_hit(sb, sa, np.array(pos_on_b) * C.UU_PER_M - self.origins[sb.arena])
+        # Ball caps, then the cars' caps and supersonic state.
+        speed = np.linalg.norm(self.ball_vel, axis=1)
+        over = speed > C.BALL_MAX_SPEED
+        if over.any():
+            self.ball_vel[over] *= (C.BALL_MAX_SPEED / speed[over])[:, None]
+            ball_dirty |= over
+        spin = np.linalg.norm(self.ball_ang_vel, axis=1)
+        over = spin > C.BALL_MAX_ANG_SPEED
+        if over.any():
+            self.ball_ang_vel[over] *= (C.BALL_MAX_ANG_SPEED / spin[over])[:, None]
+            ball_dirty |= over
+        for k in np.flatnonzero(ball_dirty & ~self.ball_frozen):
+            self._write_ball(k)
+        if self._slots:
+            car_post_tick(self.car_vel, self.car_ang_vel, self.car_active, self.cs, self.dt)
+            boost_pad_tick(self.car_pos, self.car_arena, self.car_active, self.cs, C.BOOST_PAD_POSITIONS,
+                           C.BOOST_PAD_IS_BIG, self.pad_timer, self.pad_picked, self.dt)
+            for k in np.flatnonzero(self.pad_picked >= 0):
+                self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id, int(self.pad_picked[k])))
+            self._update_demoed()
+
+    def _ball_hit(self, slot: _CarSlot, arena: int) -> None:
+        """Rocket League's extra push on a car touch, at most once every other tick per car."""
+        k = slot.index
+        self.events.append((self.tick_count, "ball_touch", slot.car_id))
+        if self.tick_count <= slot.last_ball_hit_tick + C.BALL_HIT_MIN_TICK_GAP - 1:
+            return
+        slot.last_ball_hit_tick = self.tick_count
+        rel_pos = self.ball_pos[arena] - self.car_pos[k]
+        rel_vel = self.ball_vel[arena] - self.car_vel[k]
+        rel_speed = min(float(np.linalg.norm(rel_vel)), C.BALL_HIT_MAX_REL_SPEED)
+        if rel_speed <= 0.0:
+            return
+        hit_dir = np.array([rel_pos[0], rel_pos[1], rel_pos[2] * C.BALL_HIT_Z_SCALE])
+        hit_dir /= np.linalg.norm(hit_dir)
+        fwd = self.car_rot[k][:, 0]
+        hit_dir -= fwd * ((1.0 - C.BALL_HIT_FORWARD_SCALE) * (hit_dir @ fwd))
+        hit_dir /= np.linalg.norm(hit_dir)
+        self.ball_vel[arena] += hit_dir * rel_speed * interp(_BALL_HIT_CURVE, rel_speed)
+
+    def _car_hit(self, a: _CarSlot, b: _CarSlot, contact_uu: np.ndarray) -> None:
+        """Car ``a`` bumping or demolishing car ``b`` (RocketSim's car-car rules)."""
+        ia, ib = a.index, b.index
+        if self.cs[ia, CS_IS_DEMOED] or self.cs[ib, CS_IS_DEMOED]:
+            return
+        if a.cooldown_until.get(b.car_id, -1) > self.tick_count:
+            return
+        vel_a = self.car_vel[ia]
+        speed_a = float(np.linalg.norm(vel_a))
+        delta = self.car_pos[ib] - self.car_pos[ia]
+        if speed_a <= 0.0 or vel_a @ delta <= 0.0:
+            return
+        direction = vel_a / speed_a
+        toward = float(vel_a @ (delta / np.linalg.norm(delta)))
+        if speed_a <= float(self.car_vel[ib] @ direction):
+            return
+        local = self.car_rot[ia].T @ (contact_uu - self.car_pos[ia])
+        if local[0] <= C.BUMP_MIN_FORWARD_DIST:
+            return
+        a.cooldown_until[b.car_id] = self.tick_count + int(round(C.BUMP_COOLDOWN_TIME * self.tick_rate))
+        if self.cs[ia, CS_IS_SUPERSONIC] and a.team != b.team:
+            self.demolish(b.car_id)
+            self.events.append((self.tick_count, "demo", a.car_id, b.car_id))
+            return
+        on_ground = self.cs[ib, CS_ON_GROUND] > 0.5
+        curve = _BUMP_GROUND if on_ground else _BUMP_AIR
+        up = self.car_rot[ib][:, 2] if on_ground else np.array([0.0, 0.0, 1.0])
+        self.car_vel[ib] += direction * interp(curve, toward) + up * interp(_BUMP_UP, toward)
+        self.events.append((self.tick_count, "bump", a.car_id, b.car_id))
+
+    def demolish(self, car_id: int) -> None:
+        s = self._slot(car_id)
+        k = s.index
+        self.cs[k, CS_IS_DEMOED] = 1.0
+        self.cs[k, CS_DEMO_TIMER] = C.DEMO_RESPAWN_TIME
+        cid = self.client
+        # A demoed car leaves the world: no collisions, no gravity, until it respawns.
+        pb.setCollisionFilterGroupMask(s.body, -1, 0, 0, physicsClientId=cid)
+        pb.changeDynamics(s.body, -1, mass=0.0, physicsClientId=cid)
+        pb.resetBaseVelocity(s.body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
+        self.car_vel[k] = 0.0
+        self.car_ang_vel[k] = 0.0
+
+    def _update_demoed(self) -> None:
+        for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
+            self.cs[k, CS_DEMO_TIMER] -= self.dt
+            if self.cs[k, CS_DEMO_TIMER] <= 1e-9:
+                self.respawn(self._slots[k].car_id)
+
+    def respawn(self, car_id: int) -> None:
+        s = self._slot(car_id)
+        k = s.index
+        x, y, yaw = C.RESPAWN_SPOTS_BLUE[int(self.rng.integers(len(C.RESPAWN_SPOTS_BLUE)))]
+        if s.team == 1:
+            x, y, yaw = -x, -y, yaw + math.pi
+        cid = self.client
+        pb.setCollisionFilterGroupMask(s.body, -1, 1, -1, physicsClientId=cid)  # Bullet's defaults
+        self._set_car_dynamics(s.body, s.config)
+        keep = self.controls[k].copy()
+        self.cs[k] = 0.0
+        self.controls[k] = keep
+        self.cs[k, CS_BOOST] = C.BOOST_SPAWN_AMOUNT
+        c, sn = math.cos(yaw), math.sin(yaw)
+        rot = np.column_stack(([c, sn, 0.0], [-sn, c, 0.0], [0.0, 0.0, 1.0]))
+        self.set_car(car_id, np.array([x, y, C.CAR_RESPAWN_Z]), rot, np.zeros(3), np.zeros(3))
+
+    def clear_events(self) -> None:
+        self.events.clear()
+
+    def close(self) -> None:
+        if self.client is not None and pb.isConnected(self.client):
+            pb.disconnect(self.client)
+        self.client = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: pybullet may already be gone
+            pass
