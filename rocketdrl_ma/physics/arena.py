@@ -193,6 +193,15 @@ class Arena:
         self._batch.pad_timer[self.index] = 0.0
         self.ball.set_state(BallState())
 
+    def scoring_team(self) -> int | None:
+        """The team whose goal the ball is in (the whole ball past the line): 0 blue scored, 1 orange, or None."""
+        y = self._batch.ball_pos[self.index, 1] if self._batch._state_fresh else self.ball.get_state().pos[1]
+        if y > C.GOAL_SCORE_THRESHOLD_Y + C.BALL_RADIUS:
+            return 0
+        if y < -(C.GOAL_SCORE_THRESHOLD_Y + C.BALL_RADIUS):
+            return 1
+        return None
+
     def boost_pad_timers(self) -> np.ndarray:
         """Seconds until each of the 34 pads (RLBot order) is active again; 0 = active."""
         return self._batch.pad_timer[self.index].copy()

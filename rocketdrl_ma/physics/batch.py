@@ -44,6 +44,26 @@ def quats_to_mats(quats, out):
         out[i, 2, 2] = 1 - 2 * (x * x + y * y)
 
 
+@njit(cache=True)
+def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty):
+    """Hold frozen balls still and apply the speed and spin caps; ``dirty`` marks balls to write back."""
+    for k in range(vel.shape[0]):
+        dirty[k] = False
+        if frozen[k]:
+            pos[k] = frozen_pos[k]
+            vel[k] = 0.0
+            ang_vel[k] = 0.0
+            continue
+        speed = np.sqrt(vel[k, 0] ** 2 + vel[k, 1] ** 2 + vel[k, 2] ** 2)
+        if speed > C.BALL_MAX_SPEED:
+            vel[k] *= C.BALL_MAX_SPEED / speed
+            dirty[k] = True
+        spin = np.sqrt(ang_vel[k, 0] ** 2 + ang_vel[k, 1] ** 2 + ang_vel[k, 2] ** 2)
+        if spin > C.BALL_MAX_ANG_SPEED:
+            ang_vel[k] *= C.BALL_MAX_ANG_SPEED / spin
+            dirty[k] = True
+
+
 def mat_to_quat(m: np.ndarray) -> tuple[float, float, float, float]:
     """Rotation matrix to an xyzw quaternion (Shepperd's method)."""
     tr = m[0, 0] + m[1, 1] + m[2, 2]
@@ -90,6 +110,8 @@ class ArenaBatch:
         self.tick_rate = tick_rate
         self.dt = 1.0 / tick_rate
         self.tick_count = 0
+        self.demos_enabled = True  # switches a game mode may turn off
+        self.boost_pads_enabled = True
         self.rng = np.random.default_rng(seed)
         self.client = pb.connect(pb.DIRECT)
         cid = self.client
@@ -104,6 +126,8 @@ class ArenaBatch:
         self.ball_vel = np.zeros((n_arenas, 3))
         self.ball_ang_vel = np.zeros((n_arenas, 3))
         self.ball_frozen = np.zeros(n_arenas, dtype=bool)
+        self._ball_frozen_pos = np.zeros((n_arenas, 3))
+        self._ball_dirty = np.zeros(n_arenas, dtype=bool)
         self.pad_timer = np.zeros((n_arenas, len(C.BOOST_PAD_POSITIONS)))
         self._slots: list[_CarSlot] = []
         self._slot_by_body: dict[int, _CarSlot] = {}
@@ -278,6 +302,7 @@ class ArenaBatch:
         self.ball_pos[arena], self.ball_vel[arena], self.ball_ang_vel[arena] = pos, vel, ang_vel
         # Like the game, a ball placed at rest hangs where it is until something touches it.
         self.ball_frozen[arena] = not (np.any(vel) or np.any(ang_vel))
+        self._ball_frozen_pos[arena] = pos
         self._write_ball(arena, position=True)
 
     def set_car(self, car_id: int, pos: np.ndarray, rot: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
@@ -303,10 +328,13 @@ class ArenaBatch:
                              self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
                              self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
                 self._write_car_velocities()
-            for k in np.flatnonzero(self.ball_frozen):
+            for k in (np.flatnonzero(self.ball_frozen) if self.ball_frozen.any() else ()):
                 # Cancel this tick's gravity so the frozen ball stays exactly where it is.
+                self.ball_pos[k] = self._ball_frozen_pos[k]
                 self.ball_vel[k] = (0.0, 0.0, -C.GRAVITY_Z * self.dt)
                 self._write_ball(k, position=True)
+            # RocketSim scores a car's touch from the velocities at contact, before the solver resolves it.
+            self._pre_step = (self.car_pos.copy(), self.car_vel.copy(), self.ball_pos.copy(), self.ball_vel.copy())
             pb.stepSimulation(physicsClientId=cid)
             self.tick_count += 1
             self._state_fresh = False
@@ -314,26 +342,16 @@ class ArenaBatch:
             self._post_tick()
 
     def _post_tick(self) -> None:
-        frozen = self.ball_frozen
-        if frozen.any():
-            self.ball_vel[frozen] = 0.0
-            self.ball_ang_vel[frozen] = 0.0
-        contacts = pb.getContactPoints(physicsClientId=self.client)
-        ball_dirty = np.zeros(self.n_arenas, dtype=bool)
-        car_pairs = set()
-        for c in contacts:
+        touches: set[tuple[int, int]] = set()
+        car_pairs: dict[tuple[int, int], tuple] = {}
+        for c in pb.getContactPoints(physicsClientId=self.client):
             a, b = c[1], c[2]
             if a in self._ball_arena or b in self._ball_arena:
                 ball, other = (a, b) if a in self._ball_arena else (b, a)
-                slot = self._slot_by_body.get(other)
-                if slot is not None:
-                    k = self._ball_arena[ball]
-                    if self.ball_frozen[k]:
-                        self.ball_frozen[k] = False
-                    self._ball_hit(slot, k)
-                    ball_dirty[k] = True
+                if other in self._slot_by_body:
+                    touches.add((other, self._ball_arena[ball]))
             elif a in self._slot_by_body and b in self._slot_by_body:
-                car_pairs.add((min(a, b), max(a, b), c[5], c[6]))
+                car_pairs.setdefault((a, b), (c[5], c[6]))
             elif a in self._static_set or b in self._static_set:
                 # The hitbox touching the arena drives auto-flip and auto-roll next tick.
                 car, sign = (a, 1.0) if a in self._slot_by_body else (b, -1.0)
@@ -341,34 +359,33 @@ class ArenaBatch:
                 if slot is not None:
                     self.cs[slot.index, CS_BODY_CONTACT] = 1.0
                     self.cs[slot.index, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3] = np.multiply(c[7], sign)
-        seen = set()
-        for a, b, pos_on_a, pos_on_b in car_pairs:
-            if (a, b) in seen:
-                continue
-            seen.add((a, b))
+        for body, k in sorted(touches):
+            self.ball_frozen[k] = False
+            self._ball_hit(self._slot_by_body[body], k)
+        for (a, b), (pos_on_a, pos_on_b) in sorted(car_pairs.items()):
             sa, sb = self._slot_by_body[a], self._slot_by_body[b]
             self._car_hit(sa, sb, np.array(pos_on_a) * C.UU_PER_M - self.origins[sa.arena])
             self._car_hit(sb, sa, np.array(pos_on_b) * C.UU_PER_M - self.origins[sb.arena])
-        # Ball caps, then the cars' caps and supersonic state.
-        speed = np.linalg.norm(self.ball_vel, axis=1)
-        over = speed > C.BALL_MAX_SPEED
-        if over.any():
-            self.ball_vel[over] *= (C.BALL_MAX_SPEED / speed[over])[:, None]
-            ball_dirty |= over
-        spin = np.linalg.norm(self.ball_ang_vel, axis=1)
-        over = spin > C.BALL_MAX_ANG_SPEED
-        if over.any():
-            self.ball_ang_vel[over] *= (C.BALL_MAX_ANG_SPEED / spin[over])[:, None]
-            ball_dirty |= over
-        for k in np.flatnonzero(ball_dirty & ~self.ball_frozen):
-            self._write_ball(k)
+        ball_post_tick(self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos,
+                       self._ball_dirty)
+        for k in range(self.n_arenas):
+            if self._ball_dirty[k]:
+                self._write_ball(k)
         if self._slots:
-            car_post_tick(self.car_vel, self.car_ang_vel, self.car_active, self.cs, self.dt)
-            boost_pad_tick(self.car_pos, self.car_arena, self.car_active, self.cs, C.BOOST_PAD_POSITIONS,
-                           C.BOOST_PAD_IS_BIG, self.pad_timer, self.pad_picked, self.dt)
-            for k in np.flatnonzero(self.pad_picked >= 0):
-                self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id, int(self.pad_picked[k])))
-            self._update_demoed()
+            respawn_due = car_post_tick(self.car_vel, self.car_ang_vel, self.car_active, self.cs, self.dt)
+            picked = 0
+            if self.boost_pads_enabled:
+                picked = boost_pad_tick(self.car_pos, self.car_arena, self.car_active, self.cs,
+                                        C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG, self.pad_timer, self.pad_picked,
+                                        self.dt)
+            if picked:
+                for k in np.flatnonzero(self.pad_picked >= 0):
+                    self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id,
+                                        int(self.pad_picked[k])))
+            if respawn_due:
+                for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
+                    if self.cs[k, CS_DEMO_TIMER] <= 0.0:
+                        self.respawn(self._slots[k].car_id)
 
     def _ball_hit(self, slot: _CarSlot, arena: int) -> None:
         """Rocket League's extra push on a car touch, at most once every other tick per car."""
@@ -377,8 +394,9 @@ class ArenaBatch:
         if self.tick_count <= slot.last_ball_hit_tick + C.BALL_HIT_MIN_TICK_GAP - 1:
             return
         slot.last_ball_hit_tick = self.tick_count
-        rel_pos = self.ball_pos[arena] - self.car_pos[k]
-        rel_vel = self.ball_vel[arena] - self.car_vel[k]
+        car_pos, car_vel, ball_pos, ball_vel = self._pre_step
+        rel_pos = ball_pos[arena] - car_pos[k]
+        rel_vel = ball_vel[arena] - car_vel[k]
         rel_speed = min(float(np.linalg.norm(rel_vel)), C.BALL_HIT_MAX_REL_SPEED)
         if rel_speed <= 0.0:
             return
@@ -388,6 +406,7 @@ class ArenaBatch:
         hit_dir -= fwd * ((1.0 - C.BALL_HIT_FORWARD_SCALE) * (hit_dir @ fwd))
         hit_dir /= np.linalg.norm(hit_dir)
         self.ball_vel[arena] += hit_dir * rel_speed * interp(_BALL_HIT_CURVE, rel_speed)
+        self._write_ball(arena)
 
     def _car_hit(self, a: _CarSlot, b: _CarSlot, contact_uu: np.ndarray) -> None:
         """Car ``a`` bumping or demolishing car ``b`` (RocketSim's car-car rules)."""
@@ -396,20 +415,21 @@ class ArenaBatch:
             return
         if a.cooldown_until.get(b.car_id, -1) > self.tick_count:
             return
-        vel_a = self.car_vel[ia]
+        car_pos, car_vel, _, _ = self._pre_step  # the velocities at contact, as RocketSim's callback sees them
+        vel_a = car_vel[ia]
         speed_a = float(np.linalg.norm(vel_a))
-        delta = self.car_pos[ib] - self.car_pos[ia]
+        delta = car_pos[ib] - car_pos[ia]
         if speed_a <= 0.0 or vel_a @ delta <= 0.0:
             return
         direction = vel_a / speed_a
         toward = float(vel_a @ (delta / np.linalg.norm(delta)))
-        if speed_a <= float(self.car_vel[ib] @ direction):
+        if speed_a <= float(car_vel[ib] @ direction):
             return
         local = self.car_rot[ia].T @ (contact_uu - self.car_pos[ia])
         if local[0] <= C.BUMP_MIN_FORWARD_DIST:
             return
         a.cooldown_until[b.car_id] = self.tick_count + int(round(C.BUMP_COOLDOWN_TIME * self.tick_rate))
-        if self.cs[ia, CS_IS_SUPERSONIC] and a.team != b.team:
+        if self.cs[ia, CS_IS_SUPERSONIC] and a.team != b.team and self.demos_enabled:
             self.demolish(b.car_id)
             self.events.append((self.tick_count, "demo", a.car_id, b.car_id))
             return
@@ -431,12 +451,6 @@ class ArenaBatch:
         pb.resetBaseVelocity(s.body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
         self.car_vel[k] = 0.0
         self.car_ang_vel[k] = 0.0
-
-    def _update_demoed(self) -> None:
-        for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
-            self.cs[k, CS_DEMO_TIMER] -= self.dt
-            if self.cs[k, CS_DEMO_TIMER] <= 1e-9:
-                self.respawn(self._slots[k].car_id)
 
     def respawn(self, car_id: int) -> None:
         s = self._slot(car_id)

@@ -497,9 +497,18 @@ def _start_flip(i, cs, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
 
 @njit(cache=True)
 def car_post_tick(vel, ang_vel, active, cs, dt):
-    """Speed caps and the supersonic state, after the rigid-body step."""
+    """Speed caps, the supersonic state and demolition timers, after the rigid-body step.
+
+    Returns how many demolished cars are due to respawn.
+    """
+    respawn_due = 0
     for i in range(vel.shape[0]):
-        if not active[i] or cs[i, CS_IS_DEMOED] > 0.5:
+        if not active[i]:
+            continue
+        if cs[i, CS_IS_DEMOED] > 0.5:
+            cs[i, CS_DEMO_TIMER] = max(cs[i, CS_DEMO_TIMER] - dt, 0.0)
+            if cs[i, CS_DEMO_TIMER] <= 0.0:
+                respawn_due += 1
             continue
         speed = np.sqrt(_dot(vel[i], vel[i]))
         if speed > C.CAR_MAX_SPEED:
@@ -517,11 +526,16 @@ def car_post_tick(vel, ang_vel, active, cs, dt):
         else:
             cs[i, CS_SUPERSONIC_TIME] = 0.0
         cs[i, CS_IS_SUPERSONIC] = 1.0 if supersonic else 0.0
+    return respawn_due
 
 
 @njit(cache=True)
 def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_timer, picked, dt):
-    """Count pad cooldowns down and let cars pick up active pads; ``picked[i]`` gets the pad index or -1."""
+    """Count pad cooldowns down and let cars pick up active pads; ``picked[i]`` gets the pad index or -1.
+
+    Returns the number of pickups this tick.
+    """
+    n_picked = 0
     for a in range(pad_timer.shape[0]):
         for k in range(pad_timer.shape[1]):
             if pad_timer[a, k] > 0.0:
@@ -542,4 +556,6 @@ def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_time
                 cs[i, CS_BOOST] = min(cs[i, CS_BOOST] + amount, C.BOOST_MAX)
                 pad_timer[a, k] = C.BOOST_PAD_BIG_COOLDOWN if pad_is_big[k] else C.BOOST_PAD_SMALL_COOLDOWN
                 picked[i] = k
+                n_picked += 1
                 break
+    return n_picked

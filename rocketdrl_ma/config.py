@@ -1,0 +1,122 @@
+"""YAML game configs: loading, defaults and validation shared by the env, the server and the trainer.
+
+A config names a game mode (``mode``), the mode's own parameters (its constructor arguments, e.g.
+``team_size`` and ``clock_s`` for a match) and the env's (``tick_skip``, ``max_cycles``,
+``observation``, ``action``, ``rewards``). Unknown keys and wrong types are errors naming the key and
+the allowed ones; nothing is silently dropped or clamped.
+"""
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rocketdrl_ma.rules import GAME_MODES
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+
+ENV_DEFAULTS: dict[str, Any] = {
+    "tick_skip": 8,
+    "max_cycles": None,
+    "observation": "team_relative",
+    "action": "continuous",
+    "rewards": {},
+}
+
+
+def resolve_config_path(path: str | Path) -> Path:
+    """A config path as given, else relative to the repository (``matches/1v1.yaml`` works from anywhere)."""
+    p = Path(path)
+    for candidate in (p, REPO_ROOT / p):
+        if candidate.is_file():
+            return candidate
+    raise ValueError(f"config: no such file {str(path)!r} (looked in the working directory and {REPO_ROOT})")
+
+
+def mode_parameters(mode: str) -> dict[str, Any]:
+    """The mode's configurable parameters and their defaults, from its constructor (and the base class)."""
+    cls = GAME_MODES[mode]
+    params: dict[str, Any] = {}
+    for klass in reversed(cls.__mro__):
+        if "__init__" not in vars(klass):
+            continue
+        for name, p in inspect.signature(klass.__init__).parameters.items():
+            if name in ("self", "kwargs", "reward_weights") or p.kind in (p.VAR_KEYWORD, p.VAR_POSITIONAL):
+                continue
+            params[name] = p.default
+    if "team_size" in params:  # a symmetric mode sets both sides through team_size
+        params.pop("blue_size", None)
+        params.pop("orange_size", None)
+    return params
+
+
+def _check_type(key: str, value: Any, default: Any) -> None:
+    if default is None or value is None and key in ("max_cycles", "overtime_limit_s"):
+        return
+    expected = type(default)
+    ok = isinstance(value, expected) and not (expected is int and isinstance(value, bool))
+    if expected is float and isinstance(value, int) and not isinstance(value, bool):
+        ok = True
+    if not ok:
+        raise ValueError(f"{key}: expected {expected.__name__}, got {type(value).__name__} {value!r}")
+
+
+def load_config(config: str | Path | dict | None = None, overrides: dict | None = None) -> dict[str, Any]:
+    """Read (if a path), merge ``overrides`` (dict sections such as ``rewards`` merge key by key), validate."""
+    if config is None:
+        raw: dict[str, Any] = {"mode": "match"}
+    elif isinstance(config, dict):
+        raw = dict(config)
+    else:
+        with open(resolve_config_path(config)) as f:
+            raw = yaml.safe_load(f) or {}
+        if not isinstance(raw, dict):
+            raise ValueError(f"config: {config} must hold a mapping of keys to values")
+    for key, value in (overrides or {}).items():
+        if isinstance(value, dict) and isinstance(raw.get(key), dict):
+            raw[key] = {**raw[key], **value}
+        else:
+            raw[key] = value
+    mode = raw.pop("mode", "match")
+    if mode not in GAME_MODES:
+        raise ValueError(f"mode: unknown game mode {mode!r}; allowed: {sorted(GAME_MODES)}")
+    params = mode_parameters(mode)
+    allowed = {"mode", *ENV_DEFAULTS, *params}
+    unknown = sorted(set(raw) - allowed)
+    if unknown:
+        raise ValueError(f"config: unknown key(s) {unknown} for mode {mode!r}; allowed: {sorted(allowed)}")
+    cfg: dict[str, Any] = {"mode": mode}
+    for key, default in {**ENV_DEFAULTS, **params}.items():
+        value = raw.get(key, default)
+        if value is inspect.Parameter.empty:
+            raise ValueError(f"{key}: required for mode {mode!r}")
+        if key not in ("observation", "action", "rewards"):
+            _check_type(key, value, default)
+        cfg[key] = value
+    if not isinstance(cfg["tick_skip"], int) or cfg["tick_skip"] < 1:
+        raise ValueError(f"tick_skip: must be an int >= 1, got {cfg['tick_skip']!r}")
+    if cfg["max_cycles"] is not None and (not isinstance(cfg["max_cycles"], int) or cfg["max_cycles"] < 1):
+        raise ValueError(f"max_cycles: must be an int >= 1 or null, got {cfg['max_cycles']!r}")
+    if not isinstance(cfg["rewards"], dict):
+        raise ValueError(f"rewards: expected a mapping of term to weight, got {cfg['rewards']!r}")
+    allowed_terms = GAME_MODES[mode].REWARD_TERMS
+    for term, weight in cfg["rewards"].items():
+        if term not in allowed_terms:
+            raise ValueError(f"rewards: unknown term {term!r}; allowed: {list(allowed_terms)}")
+        if isinstance(weight, bool) or not isinstance(weight, (int, float)):
+            raise ValueError(f"rewards.{term}: expected a number, got {weight!r}")
+    for key in ("observation", "action"):
+        spec = cfg[key]
+        if isinstance(spec, str):
+            cfg[key] = {"name": spec}
+        elif not (isinstance(spec, dict) and isinstance(spec.get("name"), str)):
+            raise ValueError(f"{key}: expected a name or a mapping with 'name' and its options, got {spec!r}")
+    return cfg
+
+
+def make_rules(cfg: dict[str, Any]):
+    """The game-mode object a validated config describes."""
+    params = {k: cfg[k] for k in mode_parameters(cfg["mode"])}
+    return GAME_MODES[cfg["mode"]](reward_weights=cfg["rewards"], **params)

@@ -1,0 +1,1 @@
+"""The PettingZoo face: observation builders, action parsers, the ParallelEnv, rendering and replays."""

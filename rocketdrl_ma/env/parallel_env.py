@@ -1,0 +1,201 @@
+"""The PettingZoo face: a ``ParallelEnv`` composing a game mode, an observation builder and an action parser.
+
+One decision: actions -> ActionParser -> CarControls -> ``tick_skip`` physics ticks with the rules'
+logic after each -> GameState -> ObsBuilder (observations) and Rules (rewards per term, terminations,
+truncations, events). Observation and action spaces are the same for every agent and declared once.
+"""
+from __future__ import annotations
+
+import functools
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import ParallelEnv
+
+from rocketdrl_ma.config import load_config, make_rules
+from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.rules.state import GameState
+
+from .actions import make_action_parser
+from .observations import make_obs_builder
+
+STATE_CAR_FEATURES = 19  # pos 3, vel 3, ang_vel 3, forward 3, up 3, boost, on_ground, is_demoed, present
+
+
+def global_state_vector(state: GameState, agents: list[str]) -> np.ndarray:
+    """The whole game in the blue frame for a centralised critic, every value scaled into [-1, 1]."""
+    ball = state.ball
+    parts = [ball.pos / 6000.0, ball.vel / C.BALL_MAX_SPEED, ball.ang_vel / C.BALL_MAX_ANG_SPEED]
+    for agent in agents:
+        car = state.cars.get(agent)
+        if car is None:
+            parts.append(np.zeros(STATE_CAR_FEATURES))
+            continue
+        parts += [car.pos / 6000.0, car.vel / C.CAR_MAX_SPEED, car.ang_vel / C.CAR_MAX_ANG_SPEED,
+                  car.rot_mat[:, 0], car.rot_mat[:, 2],
+                  [car.boost / C.BOOST_MAX, float(car.on_ground), float(car.is_demoed), 1.0]]
+    cooldown = np.where(C.BOOST_PAD_IS_BIG, C.BOOST_PAD_BIG_COOLDOWN, C.BOOST_PAD_SMALL_COOLDOWN)
+    parts.append(state.pad_timers / cooldown)
+    parts.append([np.tanh((state.score[0] - state.score[1]) / 3.0), min(state.clock_s / 300.0, 1.0),
+                  float(state.is_overtime)])
+    return np.clip(np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts]), -1.0, 1.0).astype(
+        np.float32)
+
+
+class RocketDRLParallelEnv(ParallelEnv):
+    """Car football for multi-agent RL. Agents are ``blue_0..`` and ``orange_0..``.
+
+    ``config`` is a YAML path (``matches/2v2.yaml``), a dict, or None for a 1v1 match; keyword overrides
+    replace keys (dict-valued ones such as ``rewards`` merge). ``infos[agent]`` holds the scoreboard,
+    this decision's events and the reward broken down per term; at the episode's end also ``summary``.
+    """
+
+    metadata = {"name": "rocketdrl_ma_v0", "render_modes": ["human", "rgb_array"], "is_parallelizable": True,
+                "render_fps": C.TICK_RATE_HZ / 8}
+
+    def __init__(self, config: str | Path | dict | None = "matches/1v1.yaml", render_mode: str | None = None,
+                 **overrides: Any):
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode: {render_mode!r} is not one of {self.metadata['render_modes']} or None")
+        self.config = load_config(config, overrides)
+        self.rules = make_rules(self.config)
+        obs_spec, act_spec = dict(self.config["observation"]), dict(self.config["action"])
+        self.obs_builder = make_obs_builder(obs_spec.pop("name"), **obs_spec)
+        self.action_parser = make_action_parser(act_spec.pop("name"), **act_spec)
+        self.tick_skip: int = self.config["tick_skip"]
+        self.max_cycles: int | None = self.config["max_cycles"]
+        self.render_mode = render_mode
+        self.metadata = {**self.metadata, "render_fps": C.TICK_RATE_HZ / self.tick_skip}
+        self.possible_agents = list(self.rules.possible_agents)
+        self.agents: list[str] = []
+        self._obs_space = self.obs_builder.space(self.rules.blue_size, self.rules.orange_size)
+        self._action_space = self.action_parser.space()
+        n_state = 9 + STATE_CAR_FEATURES * len(self.possible_agents) + len(C.BOOST_PAD_POSITIONS) + 3
+        self.state_space = spaces.Box(-1.0, 1.0, (n_state,), np.float32)
+        self._rng: np.random.Generator | None = None
+        self._state: GameState | None = None
+        self._cycles = 0
+        self._renderer = None
+        self._frames: list[np.ndarray] = []
+        self._replay = None
+
+    @functools.lru_cache(maxsize=None)
+    def observation_space(self, agent: str) -> spaces.Box:
+        return self._obs_space
+
+    @functools.lru_cache(maxsize=None)
+    def action_space(self, agent: str) -> spaces.Space:
+        return self._action_space
+
+    # ------------------------------------------------------------------ episode
+    def reset(self, seed: int | None = None, options: dict | None = None):
+        if seed is not None or self._rng is None:
+            self._rng = np.random.default_rng(seed)
+            self._action_space.seed(seed)
+        self.rules.reset(self._rng)
+        self.agents = list(self.possible_agents)
+        self._cycles = 0
+        self._frames = []
+        state = self._state = self.rules.game_state()
+        self.obs_builder.reset(state)
+        observations = {agent: self.obs_builder.build(agent, state) for agent in self.agents}
+        infos = {agent: self._info(state, {}) for agent in self.agents}
+        self._after_decision(state)
+        return observations, infos
+
+    def step(self, actions: dict):
+        if not self.agents:
+            raise ValueError("step: the episode is over; call reset()")
+        for agent in actions:
+            if agent not in self.possible_agents:
+                raise ValueError(f"actions: unknown agent {agent!r}; agents are {self.possible_agents}")
+        missing = [agent for agent in self.agents if agent not in actions]
+        if missing:
+            raise ValueError(f"actions: no action for live agent(s) {missing}")
+        # Actions for agents no longer in the game are ignored (torchrl sends them for finished agents).
+        controls = {agent: self.action_parser.parse(agent, actions[agent], self._state) for agent in self.agents}
+        self.rules.advance(controls, self.tick_skip)
+        self._cycles += 1
+        state = self._state = self.rules.game_state()
+        terminated = self.rules.is_terminated()
+        truncated = self.rules.is_truncated() or (self.max_cycles is not None and self._cycles >= self.max_cycles)
+        observations, rewards, infos = {}, {}, {}
+        for agent in self.agents:
+            observations[agent] = self.obs_builder.build(agent, state)
+            rewards[agent], terms = self.rules.weighted_rewards(agent, state)
+            infos[agent] = self._info(state, terms)
+        if terminated or truncated:
+            summary = self.rules.summary()
+            for agent in self.agents:
+                infos[agent]["summary"] = summary
+        terminations = {agent: bool(terminated) for agent in self.agents}
+        truncations = {agent: bool(truncated and not terminated) for agent in self.agents}
+        if terminated or truncated:
+            self.agents = []
+        self._after_decision(state)
+        return observations, rewards, terminations, truncations, infos
+
+    def _info(self, state: GameState, reward_terms: dict[str, float]) -> dict:
+        return {"scoreboard": self.rules.scoreboard(), "events": list(state.events), "reward_terms": reward_terms}
+
+    def _after_decision(self, state: GameState) -> None:
+        if self._replay is not None:
+            self._replay.add(state)
+            if not self.agents:
+                self.stop_replay()
+        if self.render_mode == "human":
+            self.render()
+
+    def state(self) -> np.ndarray:
+        if self._state is None:
+            raise ValueError("state: call reset() first")
+        return global_state_vector(self._state, self.possible_agents)
+
+    # ------------------------------------------------------------------ rendering, video, replays
+    def render(self) -> np.ndarray | None:
+        if self.render_mode is None or self._state is None:
+            return None
+        if self.render_mode == "human":
+            sb = self.rules.scoreboard()
+            score = sb.get("score", {})
+            print(f"\r[{self._state.tick / C.TICK_RATE_HZ:7.1f} s] blue {score.get('blue', 0)} - "
+                  f"{score.get('orange', 0)} orange  clock {sb.get('clock_s', 0):6.1f}"
+                  f"{'  OT' if sb.get('overtime') else ''}", end="", file=sys.stderr)
+            return None
+        if self._renderer is None:
+            from .render import Renderer
+            self._renderer = Renderer()
+        frame = self._renderer.render(self._state)
+        self._frames.append(frame)
+        return frame
+
+    def save_video(self, path: str | Path, fps: float | None = None) -> None:
+        """Write the frames ``render()`` produced since the last reset as an mp4 or gif."""
+        from .render import save_video
+        if not self._frames:
+            raise ValueError("save_video: no frames; use render_mode='rgb_array' and call render() each step")
+        save_video(self._frames, str(path), fps or self.metadata["render_fps"])
+
+    def start_replay(self, path: str | Path) -> None:
+        """Record every decision's state to a replay file (closed at the episode's end or on close)."""
+        from .replay import ReplayWriter
+        self.stop_replay()
+        self._replay = ReplayWriter(str(path), meta={"config": self.config, "agents": self.possible_agents,
+                                                     "tick_skip": self.tick_skip})
+        if self._state is not None:
+            self._replay.add(self._state)
+
+    def stop_replay(self) -> None:
+        if self._replay is not None:
+            self._replay.close()
+            self._replay = None
+
+    def close(self) -> None:
+        self.stop_replay()
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        self.rules.close()

@@ -1,0 +1,1 @@
+"""Scripted bots, PPO self-play training, league evaluation and ratings."""

@@ -1,0 +1,183 @@
+"""The base rule class: a game mode's logic over an ``Arena``.
+
+A game mode says how it spawns (state mutators), what each tick means (``on_tick``: clock, goals,
+events), what each agent earns (``reward_terms``: named terms, weighted from the config), when it
+ends (``is_terminated`` / ``is_truncated``) and how it went (``summary``). The full match and every
+minigame are subclasses; a new mode needs nothing else.
+"""
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from rocketdrl_ma.physics import Arena, Car, CarControls
+from rocketdrl_ma.physics import constants as C
+
+from .mutators import KickoffMutator, StateMutator
+from .state import GameState, Obstacle, agent_names, agent_team
+
+NEUTRAL = CarControls()
+GOAL_LINE_Y = C.ARENA_EXTENT_Y
+
+
+def ball_heading_into_goal(pos: np.ndarray, vel: np.ndarray, goal_sign: float) -> bool:
+    """Would the ball, flying on (gravity, no bounces), cross the goal line at ``goal_sign * 5120`` inside the mouth?"""
+    vy = vel[1] * goal_sign
+    if vy <= 1.0:
+        return False
+    t = (GOAL_LINE_Y - pos[1] * goal_sign) / vy
+    if t < 0.0 or t > 3.0:
+        return False
+    x = pos[0] + vel[0] * t
+    z = max(pos[2] + vel[2] * t + 0.5 * C.GRAVITY_Z * t * t, C.BALL_RADIUS)
+    return abs(x) < C.GOAL_HALF_WIDTH - 0.1 * C.BALL_RADIUS and z < C.GOAL_HEIGHT
+
+
+class Rules(ABC):
+    """Owns one arena, its cars (one per agent) and the logic of a game mode."""
+
+    #: reward term names a subclass computes; the config may weight any of them.
+    REWARD_TERMS: tuple[str, ...] = ()
+
+    def __init__(self, blue_size: int = 1, orange_size: int = 1, car_preset: str = "octane",
+                 reward_weights: dict[str, float] | None = None, boost_pads: bool = True, demos: bool = True):
+        for name, size in (("blue_size", blue_size), ("orange_size", orange_size)):
+            if not isinstance(size, int) or not 0 <= size <= 4:
+                raise ValueError(f"{name}: must be an int in 0..4, got {size!r}")
+        if blue_size + orange_size == 0:
+            raise ValueError("blue_size/orange_size: a game needs at least one car")
+        self.blue_size, self.orange_size = blue_size, orange_size
+        self.car_preset = car_preset
+        self.possible_agents = agent_names(blue_size, orange_size)
+        weights = dict(reward_weights or {})
+        unknown = set(weights) - set(self.REWARD_TERMS)
+        if unknown:
+            raise ValueError(f"rewards: unknown term(s) {sorted(unknown)}; allowed: {list(self.REWARD_TERMS)}")
+        self.reward_weights = {term: float(weights.get(term, 0.0)) for term in self.REWARD_TERMS}
+        self.boost_pads, self.demos = boost_pads, demos
+        self.arena: Arena | None = None
+        self.cars: dict[str, Car] = {}
+        self.obstacles: tuple[Obstacle, ...] = ()
+        self.events: list[dict] = []
+        self.last_touch: str | None = None
+        self.last_controls: dict[str, CarControls] = {}
+        self._agent_by_car_id: dict[int, str] = {}
+
+    # ------------------------------------------------------------------ what a game mode defines
+    def spawn_mutators(self) -> list[StateMutator]:
+        """How an episode (or round) starts; the default is a kickoff."""
+        return [KickoffMutator()]
+
+    def on_reset(self, rng: np.random.Generator) -> None:
+        """Per-episode bookkeeping after spawning (clocks, counters)."""
+
+    def on_tick(self) -> None:
+        """Game logic after every physics tick (clock, goal detection); may append to ``self.events``."""
+
+    def controls_frozen(self) -> bool:
+        """True while inputs are ignored (a kickoff countdown)."""
+        return False
+
+    @abstractmethod
+    def reward_terms(self, agent: str, state: GameState) -> dict[str, float]:
+        """This decision's unweighted value of every term in ``REWARD_TERMS`` for ``agent``."""
+
+    @abstractmethod
+    def is_terminated(self) -> bool:
+        """The game reached its natural end."""
+
+    def is_truncated(self) -> bool:
+        """The game was cut off (a time limit that is not part of the rules)."""
+        return False
+
+    def scoreboard(self) -> dict:
+        return {}
+
+    def summary(self) -> dict:
+        """How the episode went, for ``infos`` at the end (score, success, durations)."""
+        return self.scoreboard()
+
+    # ------------------------------------------------------------------ machinery the env drives
+    def build(self, seed: int | None = None) -> None:
+        self.arena = Arena(seed=seed)
+        self.arena._batch.demos_enabled = self.demos
+        self.arena._batch.boost_pads_enabled = self.boost_pads
+        for agent in self.possible_agents:
+            car = self.arena.add_car(team=agent_team(agent), preset=self.car_preset)
+            self.cars[agent] = car
+            self._agent_by_car_id[car.id] = agent
+
+    def reset(self, rng: np.random.Generator) -> None:
+        if self.arena is None:
+            self.build(seed=int(rng.integers(1 << 31)))
+        for car in self.cars.values():
+            car.set_controls(NEUTRAL)
+            if car.get_state().is_demoed:
+                car.respawn()
+        for mutator in self.spawn_mutators():
+            mutator.apply(self.arena, self.cars, rng)
+        self.arena._batch.clear_events()
+        self.events = []
+        self.last_touch = None
+        self.last_controls = {agent: NEUTRAL for agent in self.cars}
+        self.on_reset(rng)
+
+    def advance(self, controls: dict[str, CarControls], ticks: int) -> None:
+        """Apply ``controls`` for ``ticks`` physics ticks, running the game logic after each."""
+        self.events = []
+        self.last_controls.update(controls)
+        for _ in range(ticks):
+            frozen = self.controls_frozen()
+            for agent, car in self.cars.items():
+                car.set_controls(NEUTRAL if frozen else self.last_controls[agent])
+            self.arena.step(1)
+            self._collect_physics_events()
+            self.on_tick()
+
+    def _collect_physics_events(self) -> None:
+        batch = self.arena._batch
+        touched = set()
+        for event in batch.events:
+            tick, kind = event[0], event[1]
+            if kind == "ball_touch":
+                agent = self._agent_by_car_id[event[2]]
+                if agent not in touched:
+                    touched.add(agent)
+                    self.last_touch = agent
+                    self.events.append({"kind": "touch", "tick": tick, "agent": agent})
+            elif kind == "demo":
+                self.events.append({"kind": "demo", "tick": tick, "agent": self._agent_by_car_id[event[2]],
+                                    "victim": self._agent_by_car_id[event[3]]})
+            elif kind == "bump":
+                self.events.append({"kind": "bump", "tick": tick, "agent": self._agent_by_car_id[event[2]],
+                                    "victim": self._agent_by_car_id[event[3]]})
+            elif kind == "boost_pickup":
+                self.events.append({"kind": "boost_pickup", "tick": tick, "agent": self._agent_by_car_id[event[2]],
+                                    "pad": event[3]})
+        batch.clear_events()
+
+    def game_state(self) -> GameState:
+        arena = self.arena
+        return GameState(
+            tick=arena.tick_count, tick_rate=arena.tick_rate,
+            cars={agent: car.get_state() for agent, car in self.cars.items()},
+            ball=arena.ball.get_state(), pad_timers=arena.boost_pad_timers(),
+            last_controls=dict(self.last_controls), last_touch=self.last_touch, obstacles=self.obstacles,
+            events=list(self.events), car_configs={agent: car.config for agent, car in self.cars.items()},
+            **self._scoreboard_fields())
+
+    def _scoreboard_fields(self) -> dict:
+        """GameState fields (score, clock_s, is_overtime, kickoff_pending) a subclass fills in."""
+        return {}
+
+    def weighted_rewards(self, agent: str, state: GameState) -> tuple[float, dict[str, float]]:
+        """The agent's reward and its per-term breakdown (each term already weighted)."""
+        terms = self.reward_terms(agent, state)
+        weighted = {term: self.reward_weights[term] * float(terms.get(term, 0.0)) for term in self.REWARD_TERMS}
+        return float(sum(weighted.values())), weighted
+
+    def close(self) -> None:
+        if self.arena is not None:
+            self.arena.close()
+            self.arena = None

@@ -1,0 +1,168 @@
+"""The full match: 1v1 to 4v4, clock, kickoff countdown, goals, overtime and the zero-second rule."""
+from __future__ import annotations
+
+import numpy as np
+
+from rocketdrl_ma.physics import constants as C
+
+from .base import Rules, ball_heading_into_goal
+from .mutators import KickoffMutator
+from .state import BLUE, ORANGE, TEAM_NAMES, GameState, agent_team
+
+BALL_ON_GROUND_Z = C.BALL_RADIUS + 5.0
+
+
+def opponent_goal_sign(team: int) -> float:
+    """+1 if the team attacks the +y goal (blue), -1 for orange."""
+    return 1.0 if team == BLUE else -1.0
+
+
+class Match(Rules):
+    """A Rocket League match.
+
+    The clock (``clock_s``, default 300) runs only while play is live. Each kickoff freezes the cars for
+    ``kickoff_countdown_s`` of game time (3 s in the game; 0 is handy for training). A goal (the whole
+    ball past the goal line) scores for the attacking team and resets to a kickoff. At 0:00 a tied game
+    goes to golden-goal overtime; otherwise play continues until the ball next touches the ground (the
+    zero-second rule). Overtime longer than ``overtime_limit_s`` truncates the episode as a draw.
+    """
+
+    REWARD_TERMS = ("goal", "touch", "ball_velocity_to_goal", "player_velocity_to_ball", "boost")
+
+    def __init__(self, team_size: int = 1, clock_s: float = 300.0, kickoff_countdown_s: float = 3.0,
+                 overtime_limit_s: float | None = 300.0, **kwargs):
+        weights = {"goal": 10.0, **(kwargs.pop("reward_weights", None) or {})}
+        super().__init__(blue_size=team_size, orange_size=team_size, reward_weights=weights, **kwargs)
+        if not clock_s > 0.0:
+            raise ValueError(f"clock_s: must be > 0, got {clock_s!r}")
+        if kickoff_countdown_s < 0.0:
+            raise ValueError(f"kickoff_countdown_s: must be >= 0, got {kickoff_countdown_s!r}")
+        if overtime_limit_s is not None and overtime_limit_s <= 0.0:
+            raise ValueError(f"overtime_limit_s: must be > 0 or null, got {overtime_limit_s!r}")
+        self.team_size = team_size
+        self.clock_length_s = float(clock_s)
+        self.kickoff_countdown_s = float(kickoff_countdown_s)
+        self.overtime_limit_s = overtime_limit_s
+
+    def on_reset(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+        self.score = [0, 0]
+        self.clock_s = self.clock_length_s
+        self.overtime = False
+        self.overtime_s = 0.0
+        self.ended = False
+        self.countdown_s = self.kickoff_countdown_s
+        self.goals_this_decision: list[int] = []
+        self.decisions = 0
+        self._classified = 0
+        self._ball_prev = None
+        self.stats = {agent: {"goals": 0, "touches": 0, "shots": 0, "saves": 0, "demos": 0} for agent in self.cars}
+
+    def controls_frozen(self) -> bool:
+        return self.countdown_s > 0.0
+
+    def on_tick(self) -> None:
+        dt = self.arena.tick_time
+        ball = self.arena.ball.get_state()
+        self._score_touch_events(ball)
+        if self.ended:
+            return
+        if self.countdown_s > 0.0:
+            self.countdown_s = max(self.countdown_s - dt, 0.0)
+            return
+        team = self.arena.scoring_team()
+        if team is not None:
+            self._goal(team)
+            return
+        if self.overtime:
+            self.overtime_s += dt
+        elif self.clock_s > 0.0:
+            self.clock_s = max(self.clock_s - dt, 0.0)
+        if not self.overtime and self.clock_s <= 0.0:
+            if self.score[BLUE] == self.score[ORANGE]:
+                self.overtime = True
+                self.events.append({"kind": "overtime", "tick": self.arena.tick_count})
+            elif ball.pos[2] <= BALL_ON_GROUND_Z:
+                self.ended = True  # zero-second rule: the match ends once the ball touches the ground
+
+    def _score_touch_events(self, ball) -> None:
+        """Classify this tick's new touches as shots (heading into the opponent goal after the touch) or saves
+        (the ball was heading into the toucher's own goal before it and is not after), and count stats."""
+        prev = self._ball_prev
+        new_events = self.events[self._classified:]
+        for event in new_events:
+            agent = event.get("agent")
+            if event["kind"] == "touch":
+                self.stats[agent]["touches"] += 1
+                sign = opponent_goal_sign(agent_team(agent))
+                if ball_heading_into_goal(ball.pos, ball.vel, sign):
+                    self.events.append({"kind": "shot", "tick": event["tick"], "agent": agent})
+                    self.stats[agent]["shots"] += 1
+                if (prev is not None and ball_heading_into_goal(prev.pos, prev.vel, -sign)
+                        and not ball_heading_into_goal(ball.pos, ball.vel, -sign)):
+                    self.events.append({"kind": "save", "tick": event["tick"], "agent": agent})
+                    self.stats[agent]["saves"] += 1
+            elif event["kind"] == "demo":
+                self.stats[agent]["demos"] += 1
+        self._classified = len(self.events)
+        self._ball_prev = ball
+
+    def advance(self, controls, ticks: int) -> None:
+        self.goals_this_decision = []
+        self._classified = 0
+        self.decisions += 1
+        super().advance(controls, ticks)
+
+    def _goal(self, team: int) -> None:
+        self.score[team] += 1
+        self.goals_this_decision.append(team)
+        scorer = self.last_touch
+        own_goal = scorer is not None and agent_team(scorer) != team
+        if scorer is not None and not own_goal:
+            self.stats[scorer]["goals"] += 1
+        self.events.append({"kind": "goal", "tick": self.arena.tick_count, "team": TEAM_NAMES[team],
+                            "scorer": scorer, "own_goal": own_goal})
+        if self.overtime or (self.clock_s <= 0.0):
+            self.ended = True
+            return
+        KickoffMutator().apply(self.arena, self.cars, self.rng)
+        self.arena._batch.clear_events()
+        self.last_touch = None
+        self.countdown_s = self.kickoff_countdown_s
+
+    def is_terminated(self) -> bool:
+        return self.ended
+
+    def is_truncated(self) -> bool:
+        return self.overtime_limit_s is not None and self.overtime_s >= self.overtime_limit_s
+
+    def _scoreboard_fields(self) -> dict:
+        return {"score": (self.score[BLUE], self.score[ORANGE]),
+                "clock_s": self.overtime_s if self.overtime else self.clock_s,
+                "is_overtime": self.overtime, "kickoff_pending": self.countdown_s > 0.0}
+
+    def scoreboard(self) -> dict:
+        return {"score": {"blue": self.score[BLUE], "orange": self.score[ORANGE]},
+                "clock_s": round(self.overtime_s if self.overtime else self.clock_s, 4),
+                "overtime": self.overtime}
+
+    def summary(self) -> dict:
+        winner = None
+        if self.score[BLUE] != self.score[ORANGE]:
+            winner = "blue" if self.score[BLUE] > self.score[ORANGE] else "orange"
+        return {**self.scoreboard(), "winner": winner, "stats": {a: dict(s) for a, s in self.stats.items()}}
+
+    def reward_terms(self, agent: str, state: GameState) -> dict[str, float]:
+        team = agent_team(agent)
+        sign = opponent_goal_sign(team)
+        goal = sum(1.0 if scored == team else -1.0 for scored in self.goals_this_decision)
+        car = state.cars[agent]
+        ball = state.ball
+        to_goal = np.array([0.0, sign * (C.ARENA_EXTENT_Y + C.GOAL_DEPTH / 2), C.GOAL_HEIGHT / 2]) - ball.pos
+        ball_to_goal = float(ball.vel @ to_goal / (np.linalg.norm(to_goal) * C.BALL_MAX_SPEED))
+        to_ball = ball.pos - car.pos
+        dist = np.linalg.norm(to_ball)
+        player_to_ball = float(car.vel @ to_ball / (dist * C.CAR_MAX_SPEED)) if dist > 1e-6 else 0.0
+        touched = any(e["kind"] == "touch" and e["agent"] == agent for e in state.events)
+        return {"goal": goal, "touch": float(touched), "ball_velocity_to_goal": ball_to_goal,
+                "player_velocity_to_ball": player_to_ball, "boost": float(np.sqrt(car.boost / C.BOOST_MAX))}

@@ -1,0 +1,49 @@
+"""What a decision sees: one read-only snapshot of the game, shared by observations, rewards and rules."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rocketdrl_ma.physics import BallState, CarConfig, CarControls, CarState
+
+BLUE, ORANGE = 0, 1
+TEAM_NAMES = ("blue", "orange")
+
+
+def agent_team(agent: str) -> int:
+    """``blue_0`` -> 0, ``orange_3`` -> 1 (PettingZoo's ``word_N`` names)."""
+    prefix = agent.rsplit("_", 1)[0]
+    if prefix not in TEAM_NAMES:
+        raise ValueError(f"agent: {agent!r} is not a blue_N or orange_N name")
+    return TEAM_NAMES.index(prefix)
+
+
+def agent_names(blue_size: int, orange_size: int) -> list[str]:
+    return [f"blue_{i}" for i in range(blue_size)] + [f"orange_{i}" for i in range(orange_size)]
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """A static box in the arena (a minigame barrier): centre and half extents in uu, axis-aligned."""
+    center: np.ndarray
+    half_extents: np.ndarray
+
+
+@dataclass
+class GameState:
+    """The game after a decision's ticks, in uu and the blue team's frame (z up, blue goal at -y)."""
+    tick: int
+    tick_rate: int
+    cars: dict[str, CarState]  # every car still in the game, keyed by agent name
+    ball: BallState
+    pad_timers: np.ndarray  # (34,) seconds until each pad is back; 0 = active (RLBot order)
+    last_controls: dict[str, CarControls]
+    score: tuple[int, int] = (0, 0)
+    clock_s: float = 0.0  # seconds left in regulation; counts up in overtime
+    is_overtime: bool = False
+    kickoff_pending: bool = False  # the kickoff countdown is running: cars are frozen
+    last_touch: str | None = None  # agent who touched the ball last
+    obstacles: tuple[Obstacle, ...] = ()
+    events: list[dict] = field(default_factory=list)  # this decision's events, in tick order
+    car_configs: dict[str, CarConfig] = field(default_factory=dict)  # hitbox preset of each car
