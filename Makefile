@@ -17,7 +17,7 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(PY) -m rocketdrl_ma.cli demo
+	$(PY) -m rocketdrl_ma.cli play matches/1v1.yaml --blue ball_chaser --orange goalie --clock 60
 
 # The whole suite, slow-marked tests included: correctness is never skipped.
 test: $(STAMP)

@@ -42,7 +42,7 @@ def test_kickoff_countdown_freezes_cars_and_clock():
     m.advance({a: CarControls(throttle=1.0, boost=True) for a in m.cars}, 120)
     assert np.allclose(m.cars["blue_0"].get_state().pos[:2], start[:2], atol=1.0)
     assert m.game_state().kickoff_pending and m.clock_s == pytest.approx(300.0)
-    m.advance({a: CarControls(throttle=1.0, boost=True) for a in m.cars}, 300)
+    m.advance({a: CarControls(throttle=1.0, boost=True) for a in m.cars}, 480)  # 2 s frozen, then 2 s live
     assert np.linalg.norm(m.cars["blue_0"].get_state().pos[:2] - start[:2]) > 300.0
     assert m.clock_s < 300.0 - 1.0
 
