@@ -22,6 +22,9 @@ from .car_kernel import (CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TI
 M_PER_UU = 1.0 / C.UU_PER_M
 ARENA_SPACING_UU = 20000.0  # arenas are ~8200 x 12000 uu; the gap keeps every body in its own arena
 ARENA_GRID_COLUMNS = 8
+# Bullet applies restitution to the approach speed before this tick's gravity; 0.575 gives the game's
+# measured floor bounce of 0.60 (RocketSim: v_out / v_in = 0.5998) at 120 Hz.
+BALL_RESTITUTION_BULLET = 0.575
 _BALL_HIT_CURVE = np.array(C.BALL_HIT_SCALE_CURVE)
 _BUMP_GROUND = np.array(C.BUMP_VEL_CURVE_GROUND)
 _BUMP_AIR = np.array(C.BUMP_VEL_CURVE_AIR)
@@ -166,7 +169,7 @@ class ArenaBatch:
         shape = pb.createCollisionShape(pb.GEOM_SPHERE, radius=C.BALL_RADIUS * M_PER_UU, physicsClientId=cid)
         body = pb.createMultiBody(C.BALL_MASS, shape, basePosition=(self.origins[arena] * M_PER_UU).tolist(),
                                   useMaximalCoordinates=True, physicsClientId=cid)
-        pb.changeDynamics(body, -1, lateralFriction=C.BALL_FRICTION, restitution=C.BALL_RESTITUTION,
+        pb.changeDynamics(body, -1, lateralFriction=C.BALL_FRICTION, restitution=BALL_RESTITUTION_BULLET,
                           linearDamping=C.BALL_DRAG, angularDamping=0.0, rollingFriction=0.0, spinningFriction=0.0,
                           activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, physicsClientId=cid)
         return body

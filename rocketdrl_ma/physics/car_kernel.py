@@ -353,7 +353,8 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
                     and cs[i, CS_JUMP_TIME] < C.JUMP_MIN_TIME + C.JUMP_RESET_MIN_TIME):
                 cs[i, CS_HAS_JUMPED] = 0.0
         if cs[i, CS_IS_JUMPING] > 0.5:
-            still = cs[i, CS_JUMP_TIME] < C.JUMP_MIN_TIME or (jump and cs[i, CS_JUMP_TIME] < C.JUMP_MAX_TIME)
+            # 1e-6: after 24 ticks the float sum of 1/120 lands a hair under 0.2; the game stops at 24 ticks.
+            still = cs[i, CS_JUMP_TIME] < C.JUMP_MIN_TIME or (jump and cs[i, CS_JUMP_TIME] + 1e-6 < C.JUMP_MAX_TIME)
             cs[i, CS_IS_JUMPING] = 1.0 if still else 0.0
         elif on_ground and jump_pressed:
             cs[i, CS_IS_JUMPING] = 1.0
