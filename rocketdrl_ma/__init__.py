@@ -5,6 +5,10 @@
 """
 from __future__ import annotations
 
+# Import the subpackage before defining ``env()``: a later first import of ``rocketdrl_ma.env`` would
+# otherwise rebind the package attribute ``env`` from the function to the subpackage.
+import rocketdrl_ma.env as _env_package  # noqa: F401
+
 
 def parallel_env(config="matches/1v1.yaml", render_mode=None, **overrides):
     """A PettingZoo ParallelEnv of the game the config describes."""

@@ -23,7 +23,9 @@ ENV_DEFAULTS: dict[str, Any] = {
     "observation": "team_relative",
     "action": "continuous",
     "rewards": {},
+    "info_format": "full",
 }
+INFO_FORMATS = ("full", "numeric")
 
 
 def resolve_config_path(path: str | Path) -> Path:
@@ -99,6 +101,8 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         raise ValueError(f"tick_skip: must be an int >= 1, got {cfg['tick_skip']!r}")
     if cfg["max_cycles"] is not None and (not isinstance(cfg["max_cycles"], int) or cfg["max_cycles"] < 1):
         raise ValueError(f"max_cycles: must be an int >= 1 or null, got {cfg['max_cycles']!r}")
+    if cfg["info_format"] not in INFO_FORMATS:
+        raise ValueError(f"info_format: {cfg['info_format']!r} is not one of {list(INFO_FORMATS)}")
     if not isinstance(cfg["rewards"], dict):
         raise ValueError(f"rewards: expected a mapping of term to weight, got {cfg['rewards']!r}")
     allowed_terms = GAME_MODES[mode].REWARD_TERMS

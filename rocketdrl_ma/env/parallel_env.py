@@ -23,6 +23,20 @@ from .actions import make_action_parser
 from .observations import make_obs_builder
 
 STATE_CAR_FEATURES = 19  # pos 3, vel 3, ang_vel 3, forward 3, up 3, boost, on_ground, is_demoed, present
+#: event kinds counted per agent in numeric infos (an agent is credited as ``agent`` or goal ``scorer``)
+COUNTED_EVENTS = ("goal", "touch", "shot", "save", "demo", "bump", "boost_pickup")
+
+
+def flat_numbers(tree: dict, prefix: str = "") -> dict[str, float]:
+    """``{"score": {"blue": 1}, "overtime": False}`` -> ``{"score_blue": 1.0, "overtime": 0.0}``."""
+    flat: dict[str, float] = {}
+    for key, value in tree.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(flat_numbers(value, name + "_"))
+        elif isinstance(value, (bool, int, float, np.number)):
+            flat[name] = float(value)
+    return flat
 
 
 def global_state_vector(state: GameState, agents: list[str]) -> np.ndarray:
@@ -49,8 +63,13 @@ class RocketDRLParallelEnv(ParallelEnv):
     """Car football for multi-agent RL. Agents are ``blue_0..`` and ``orange_0..``.
 
     ``config`` is a YAML path (``matches/2v2.yaml``), a dict, or None for a 1v1 match; keyword overrides
-    replace keys (dict-valued ones such as ``rewards`` merge). ``infos[agent]`` holds the scoreboard,
-    this decision's events and the reward broken down per term; at the episode's end also ``summary``.
+    replace keys (dict-valued ones such as ``rewards`` merge).
+
+    ``infos[agent]`` (``info_format: full``, the default) holds the scoreboard, this decision's events
+    and the reward broken down per term; at the episode's end also ``summary``. Frameworks that turn
+    infos into tensors (torchrl's ``PettingZooWrapper``) need the same keys and shapes every step:
+    ``info_format: numeric`` gives flat floats instead: the scoreboard's numbers (``score_blue``, ...),
+    this agent's count of each event kind in ``COUNTED_EVENTS`` this decision, and ``reward_<term>``.
     """
 
     metadata = {"name": "rocketdrl_ma_v0", "render_modes": ["human", "rgb_array"], "is_parallelizable": True,
@@ -67,6 +86,7 @@ class RocketDRLParallelEnv(ParallelEnv):
         self.action_parser = make_action_parser(act_spec.pop("name"), **act_spec)
         self.tick_skip: int = self.config["tick_skip"]
         self.max_cycles: int | None = self.config["max_cycles"]
+        self.info_format: str = self.config["info_format"]
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": C.TICK_RATE_HZ / self.tick_skip}
         self.possible_agents = list(self.rules.possible_agents)
@@ -102,7 +122,8 @@ class RocketDRLParallelEnv(ParallelEnv):
         state = self._state = self.rules.game_state()
         self.obs_builder.reset(state)
         observations = {agent: self.obs_builder.build(agent, state) for agent in self.agents}
-        infos = {agent: self._info(state, {}) for agent in self.agents}
+        no_terms = {term: 0.0 for term in self.rules.REWARD_TERMS}
+        infos = {agent: self._info(agent, state, no_terms) for agent in self.agents}
         self._after_decision(state)
         return observations, infos
 
@@ -126,8 +147,8 @@ class RocketDRLParallelEnv(ParallelEnv):
         for agent in self.agents:
             observations[agent] = self.obs_builder.build(agent, state)
             rewards[agent], terms = self.rules.weighted_rewards(agent, state)
-            infos[agent] = self._info(state, terms)
-        if terminated or truncated:
+            infos[agent] = self._info(agent, state, terms)
+        if (terminated or truncated) and self.info_format == "full":
             summary = self.rules.summary()
             for agent in self.agents:
                 infos[agent]["summary"] = summary
@@ -138,8 +159,17 @@ class RocketDRLParallelEnv(ParallelEnv):
         self._after_decision(state)
         return observations, rewards, terminations, truncations, infos
 
-    def _info(self, state: GameState, reward_terms: dict[str, float]) -> dict:
-        return {"scoreboard": self.rules.scoreboard(), "events": list(state.events), "reward_terms": reward_terms}
+    def _info(self, agent: str, state: GameState, reward_terms: dict[str, float]) -> dict:
+        if self.info_format == "full":
+            return {"scoreboard": self.rules.scoreboard(), "events": list(state.events), "reward_terms": reward_terms}
+        info = flat_numbers(self.rules.scoreboard())
+        counts = dict.fromkeys(COUNTED_EVENTS, 0.0)
+        for event in state.events:
+            if event["kind"] in counts and agent in (event.get("agent"), event.get("scorer")):
+                counts[event["kind"]] += 1.0
+        info.update(counts)
+        info.update({f"reward_{term}": value for term, value in reward_terms.items()})
+        return info
 
     def _after_decision(self, state: GameState) -> None:
         if self._replay is not None:

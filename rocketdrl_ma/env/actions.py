@@ -1,0 +1,167 @@
+"""Action parsers: what a policy outputs, turned into ``CarControls`` (RLGym v2 style, Gymnasium spaces).
+
+Each parser declares its space once (the same for every agent) and parses one agent's action.
+
+Buttons as floats: the Box parsers carry jump, boost and handbrake as floats in the same flat ``Box``
+as the analogue axes, and a button counts as pressed when its value is > 0 (0 itself is released).
+torchrl's PPO (and most continuous-control code) wants one flat Box, not a Dict or MultiBinary.
+
+Range: analogue values within 1e-6 of [-1, 1] are clipped onto it (float32 round-off); values clearly
+outside, NaN/inf, non-numbers and wrong shapes raise ``ValueError`` naming the agent. Nothing is clamped
+silently. Parsers: ``SeedActions`` (5), ``ContinuousActions`` (8), ``LookupTableActions`` (Discrete(90)).
+"""
+from __future__ import annotations
+
+import inspect
+from abc import ABC, abstractmethod
+
+import numpy as np
+from gymnasium import spaces
+
+from rocketdrl_ma.physics import CarControls
+from rocketdrl_ma.rules.state import GameState
+
+RANGE_TOLERANCE = 1e-6
+
+
+def _vector(agent: str, action, size: int) -> np.ndarray:
+    try:
+        arr = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError(f"action for {agent}: expected {size} numbers, got {action!r}") from None
+    if arr.shape != (size,):
+        raise ValueError(f"action for {agent}: expected shape ({size},), got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"action for {agent}: must be finite, got {arr.tolist()}")
+    if np.any(np.abs(arr) > 1.0 + RANGE_TOLERANCE):
+        raise ValueError(f"action for {agent}: values must be in [-1, 1], got {arr.tolist()}")
+    return np.clip(arr, -1.0, 1.0)
+
+
+def _button(pressed: bool) -> float:
+    return 1.0 if pressed else -1.0
+
+
+class ActionParser(ABC):
+    """Turns one agent's policy output into ``CarControls``; one space for every agent."""
+
+    @abstractmethod
+    def space(self) -> spaces.Space:
+        """The action space, the same for every agent."""
+
+    @abstractmethod
+    def parse(self, agent: str, action, state: GameState | None = None) -> CarControls:
+        """``agent``'s action as controls; ValueError naming the agent if it is not in the space."""
+
+    @abstractmethod
+    def encode(self, controls: CarControls):
+        """The action (in this parser's space) closest to ``controls``: how scripted bots act through the env."""
+
+
+class ContinuousActions(ActionParser):
+    """``Box(-1, 1, (8,))``: throttle, steer, pitch, yaw, roll, then jump, boost, handbrake as buttons (> 0)."""
+
+    def space(self) -> spaces.Box:
+        return spaces.Box(-1.0, 1.0, (8,), np.float32)
+
+    def parse(self, agent: str, action, state: GameState | None = None) -> CarControls:
+        a = _vector(agent, action, 8)
+        return CarControls(*a[:5], jump=a[5] > 0.0, boost=a[6] > 0.0, handbrake=a[7] > 0.0)
+
+    def encode(self, controls: CarControls) -> np.ndarray:
+        c = controls
+        return np.array([c.throttle, c.steer, c.pitch, c.yaw, c.roll, _button(c.jump), _button(c.boost),
+                         _button(c.handbrake)], dtype=np.float32)
+
+
+class SeedActions(ActionParser):
+    """The RocketDRL seed's 2 + 3 actions, ``Box(-1, 1, (5,))``: throttle, steer, then jump, boost, drift."""
+
+    def space(self) -> spaces.Box:
+        return spaces.Box(-1.0, 1.0, (5,), np.float32)
+
+    def parse(self, agent: str, action, state: GameState | None = None) -> CarControls:
+        a = _vector(agent, action, 5)
+        return CarControls(throttle=a[0], steer=a[1], jump=a[2] > 0.0, boost=a[3] > 0.0, handbrake=a[4] > 0.0)
+
+    def encode(self, controls: CarControls) -> np.ndarray:
+        c = controls
+        return np.array([c.throttle, c.steer, _button(c.jump), _button(c.boost), _button(c.handbrake)],
+                        dtype=np.float32)
+
+
+def lookup_table() -> np.ndarray:
+    """RLGym's 90 control combinations (``LookupTableAction.make_lookup_table``), rows of
+    [throttle, steer, pitch, yaw, roll, jump, boost, handbrake].
+
+    Ground (24): throttle x steer x boost x handbrake, boost only with throttle 1; yaw follows steer so
+    the row also turns in the air. Aerial (66): pitch x yaw x roll x jump x boost, without jumps that yaw
+    (roll gives the side flips) and without the rows pitch = roll = jump = 0 (ground duplicates); throttle
+    follows boost, and handbrake is held on jumps with a direction (wavedashes).
+    """
+    rows = []
+    for throttle in (-1, 0, 1):  # on the ground
+        for steer in (-1, 0, 1):
+            for boost in (0, 1):
+                for handbrake in (0, 1):
+                    if boost == 1 and throttle != 1:
+                        continue
+                    rows.append([throttle or boost, steer, 0, steer, 0, 0, boost, handbrake])
+    for pitch in (-1, 0, 1):  # in the air
+        for yaw in (-1, 0, 1):
+            for roll in (-1, 0, 1):
+                for jump in (0, 1):
+                    for boost in (0, 1):
+                        if jump == 1 and yaw != 0:  # roll gives the side flips
+                            continue
+                        if pitch == roll == jump == 0:  # already a ground action
+                            continue
+                        handbrake = int(jump == 1 and (pitch != 0 or yaw != 0 or roll != 0))  # wavedashes
+                        rows.append([boost, yaw, pitch, yaw, roll, jump, boost, handbrake])
+    return np.array(rows, dtype=np.float64)
+
+
+class LookupTableActions(ActionParser):
+    """``Discrete(90)``: an index into RLGym's standard table of control combinations (``lookup_table``)."""
+
+    def __init__(self):
+        self.table = lookup_table()
+
+    def space(self) -> spaces.Discrete:
+        return spaces.Discrete(len(self.table))
+
+    def parse(self, agent: str, action, state: GameState | None = None) -> CarControls:
+        """Accepts a Python int, a numpy integer scalar or a shape-(1,) integer array."""
+        try:
+            arr = np.asarray(action)
+        except (TypeError, ValueError):
+            raise ValueError(f"action for {agent}: expected one integer index, got {action!r}") from None
+        if arr.shape not in ((), (1,)) or not np.issubdtype(arr.dtype, np.integer):
+            raise ValueError(f"action for {agent}: expected one integer index, got {action!r}")
+        index = int(arr.reshape(-1)[0])
+        if not 0 <= index < len(self.table):
+            raise ValueError(f"action for {agent}: index must be in 0..{len(self.table) - 1}, got {index}")
+        r = self.table[index]
+        return CarControls(*r[:5], jump=r[5] > 0, boost=r[6] > 0, handbrake=r[7] > 0)
+
+    def encode(self, controls: CarControls) -> int:
+        target = ContinuousActions().encode(controls).astype(np.float64)
+        table = self.table.copy()
+        table[:, 5:] = np.where(table[:, 5:] > 0, 1.0, -1.0)
+        return int(np.argmin(np.abs(table - target).sum(axis=1)))
+
+
+ACTION_PARSERS: dict[str, type[ActionParser]] = {
+    "continuous": ContinuousActions, "seed": SeedActions, "lookup": LookupTableActions}
+
+
+def make_action_parser(name: str, **kwargs) -> ActionParser:
+    """A parser by registry name; unknown names and options are ValueErrors naming the allowed ones."""
+    if not isinstance(name, str) or name not in ACTION_PARSERS:
+        raise ValueError(f"action: unknown action parser {name!r}; allowed: {sorted(ACTION_PARSERS)}")
+    cls = ACTION_PARSERS[name]
+    allowed = [p for p in inspect.signature(cls.__init__).parameters if p not in ("self", "args", "kwargs")]
+    unknown = sorted(set(kwargs) - set(allowed))
+    if unknown:
+        raise ValueError(f"action.{name}: unknown option(s) {unknown}; allowed: {allowed}")
+    return cls(**kwargs)

@@ -1,0 +1,529 @@
+"""Observation builders: a ``GameState`` turned into one flat float32 vector per agent.
+
+The interface follows RLGym v2's small composable builders and Gymnasium's spaces:
+
+* ``space(blue_size, orange_size)`` declares the ``Box`` once; it is the same for every agent, float32,
+  with finite bounds (slot by slot: flags in [0, 1], signed quantities in [-1, 1]).
+* ``reset(state)`` is an optional per-episode hook (a no-op here for every builder).
+* ``build(agent, state)`` returns a float32 vector inside that space. The **last step** of every builder
+  is a clip to the space's bounds, so a state beyond the scales below (a car past the declared speed
+  cap, a ball deep in a goal) saturates instead of leaving the space. Inputs are validated upstream
+  (``CarState``/``BallState`` reject NaN), so the clip never hides a bad value, only a large one.
+
+Team frame: orange sees the field turned half a circle about z (x -> -x, y -> -y), so one policy plays
+both sides. Positions, velocities and direction vectors map ``v -> (-vx, -vy, vz)``; angular velocity
+does the same (a proper rotation about z by pi maps ``(wx, wy, wz) -> (-wx, -wy, wz)``); boost pads are
+permuted to the pad at the mirrored position. A blue car at a state and the matching orange car at the
+mirrored state (teams swapped) get bit-identical observations.
+
+Builders: ``SeedSensors`` (the RocketDRL seed's 12 general data sensors), ``RaySensor`` (a fan of
+distance rays with a hit class), ``TeamRelativeObs`` (the full state in the team frame) and
+``CombinedObs`` (concatenation). ``make_obs_builder("seed_sensors+ray")`` combines by name.
+"""
+from __future__ import annotations
+
+import inspect
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+
+import numpy as np
+from gymnasium import spaces
+from numba import njit
+
+from rocketdrl_ma.physics import CarControls, get_preset
+from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.arena_geometry import arena_distance, arena_raycast
+from rocketdrl_ma.physics.state import CarState
+from rocketdrl_ma.rules.state import BLUE, TEAM_NAMES, GameState, agent_team
+
+# ---------------------------------------------------------------- scales (uu, uu/s, rad/s)
+POS_SCALE = np.array([C.ARENA_EXTENT_X, C.ARENA_EXTENT_Y + C.GOAL_DEPTH, C.ARENA_HEIGHT])  # to the goal's back
+#: The longest straight line in the arena (corner to corner, goal back to goal back): |car -> ball| <= this.
+ARENA_DIAGONAL = float(np.linalg.norm([2.0 * POS_SCALE[0], 2.0 * POS_SCALE[1], C.ARENA_HEIGHT]))
+CAR_VEL_SCALE = C.CAR_MAX_SPEED
+CAR_ANG_VEL_SCALE = C.CAR_MAX_ANG_SPEED
+BALL_VEL_SCALE = C.BALL_MAX_SPEED
+BALL_ANG_VEL_SCALE = C.BALL_MAX_ANG_SPEED
+CLOCK_SCALE_S = 300.0  # a 5-minute match
+SCORE_DIFF_SCALE = 3.0  # tanh(diff / 3)
+#: The opponent's goal centre in the team frame (blue attacks +y; orange too, after mirroring).
+ATTACK_GOAL_CENTER = np.array([0.0, C.ARENA_EXTENT_Y, C.GOAL_HEIGHT / 2.0])
+
+MIRROR = np.array([-1.0, -1.0, 1.0])  # x -> -x, y -> -y: the half-turn about z that swaps the sides
+PAD_COOLDOWN = np.where(C.BOOST_PAD_IS_BIG, C.BOOST_PAD_BIG_COOLDOWN, C.BOOST_PAD_SMALL_COOLDOWN)
+
+
+def _pad_mirror_permutation() -> np.ndarray:
+    """``perm[i]`` is the pad at the mirrored position of pad ``i`` (x -> -x, y -> -y)."""
+    xy = C.BOOST_PAD_POSITIONS[:, :2]
+    dist = np.linalg.norm(xy[:, None, :] + xy[None, :, :], axis=2)  # |p_j - (-p_i)|
+    perm = np.argmin(dist, axis=1)
+    assert np.all(dist[np.arange(len(xy)), perm] < 1e-6) and len(set(perm.tolist())) == len(xy)
+    return perm
+
+
+PAD_MIRROR = _pad_mirror_permutation()
+N_PADS = len(C.BOOST_PAD_POSITIONS)
+
+
+def team_sign(agent: str) -> np.ndarray:
+    """The per-axis sign that takes a world vector into ``agent``'s team frame."""
+    return np.ones(3) if agent_team(agent) == BLUE else MIRROR
+
+
+def has_flip_available(car: CarState) -> bool:
+    """Can the car still dodge: on the ground, or airborne within the double-jump window with its flip unused."""
+    if car.on_ground:
+        return True
+    return (not car.has_double_jumped and not car.has_flipped
+            and car.air_time_since_jump < C.DOUBLEJUMP_MAX_DELAY)
+
+
+def _box(low: Sequence[float], high: Sequence[float]) -> spaces.Box:
+    low_a, high_a = np.asarray(low, dtype=np.float32), np.asarray(high, dtype=np.float32)
+    return spaces.Box(low_a, high_a, low_a.shape, np.float32)
+
+
+def _finish(values: np.ndarray, space: spaces.Box) -> np.ndarray:
+    """The last step of every ``build``: clip to the space's bounds and cast to float32."""
+    return np.clip(np.asarray(values, dtype=np.float64), space.low, space.high).astype(np.float32)
+
+
+def _check_sizes(blue_size: int, orange_size: int) -> None:
+    for name, size in (("blue_size", blue_size), ("orange_size", orange_size)):
+        if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or not 0 <= size <= 4:
+            raise ValueError(f"{name}: must be an int in 0..4, got {size!r}")
+    if blue_size + orange_size == 0:
+        raise ValueError("blue_size/orange_size: a game needs at least one car")
+
+
+class ObsBuilder(ABC):
+    """Turns a ``GameState`` into one agent's observation (RLGym v2 style: small and composable)."""
+
+    @abstractmethod
+    def space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        """The observation space for this team size: float32, finite bounds, the same for every agent."""
+
+    def reset(self, state: GameState) -> None:
+        """Per-episode hook, called with the first state of each episode before any ``build``."""
+
+    @abstractmethod
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        """``agent``'s observation: float32, inside ``space`` (clipped to its bounds as the last step)."""
+
+
+# ================================================================= the seed's general data sensors
+class SeedSensors(ObsBuilder):
+    """The RocketDRL seed paper's 12 general data sensors (18 numbers; 15 without the goal sensor).
+
+    ====== ================ ======================================================================== =========
+    index  sensor           value                                                                    range
+    ====== ================ ======================================================================== =========
+    0      ready to drive   on the ground and not in a jump                                           {0, 1}
+    1      body on ground   ``on_ground`` (at least 3 wheels touching)                                {0, 1}
+    2      wheels on ground number of wheels in contact / 4                                           [0, 1]
+    3      jumping          ``is_jumping`` (the jump button's held phase)                             {0, 1}
+    4      boost amount     boost / 100                                                               [0, 1]
+    5      boosting         last control's boost pressed and boost > 0                                {0, 1}
+    6      velocity sign    sign of the forward speed (velocity . forward)                            {-1,0,1}
+    7      speed            |velocity| / 2300                                                         [0, 1]
+    8      steer angle      last control's steer                                                      [-1, 1]
+    9-11   rotation         Euler pitch, yaw, roll / pi, in the team frame (see below)                [-1, 1]
+    12-14  car -> ball      ball - car in the car's frame (forward, right, up) / ARENA_DIAGONAL       [-1, 1]
+    15-17  ball -> goal     opponent goal centre - ball, team frame / ARENA_DIAGONAL (if goal_sensor) [-1, 1]
+    ====== ================ ======================================================================== =========
+
+    Euler angles from the team-frame rotation matrix (columns forward ``f``, right ``r``, up ``u``):
+    pitch = atan2(f.z, |f.xy|) (nose up > 0), yaw = atan2(f.y, f.x), roll = atan2(r.z, u.z).
+    ``ARENA_DIAGONAL`` (~14673 uu) is the longest line through the arena including the goals, so the two
+    vectors never saturate. The opponent goal centre is (0, 5120, 321.4) in the team frame for both teams.
+    An agent missing from ``state.cars`` observes zeros.
+    """
+
+    SLOTS = ("ready_to_drive", "on_ground", "wheels_on_ground", "jumping", "boost_amount", "boosting",
+             "velocity_sign", "speed", "steer", "pitch", "yaw", "roll", "ball_local_x", "ball_local_y",
+             "ball_local_z", "ball_to_goal_x", "ball_to_goal_y", "ball_to_goal_z")
+    _LOW = (0, 0, 0, 0, 0, 0, -1, 0, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1)
+
+    def __init__(self, goal_sensor: bool = True):
+        if not isinstance(goal_sensor, bool):
+            raise ValueError(f"goal_sensor: expected a bool, got {goal_sensor!r}")
+        self.goal_sensor = goal_sensor
+        self.size = 18 if goal_sensor else 15
+        self._space = _box(self._LOW[:self.size], [1.0] * self.size)
+
+    def space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        _check_sizes(blue_size, orange_size)
+        return self._space
+
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        sign = team_sign(agent)
+        car = state.cars.get(agent)
+        out = np.zeros(self.size)
+        if car is None:
+            return _finish(out, self._space)
+        controls = state.last_controls.get(agent) or CarControls()
+        rot = car.rot_mat * sign[:, None]  # the team frame: each column mirrored
+        forward, right, up = rot[:, 0], rot[:, 1], rot[:, 2]
+        forward_speed = float(np.dot(car.vel, car.rot_mat[:, 0]))
+        out[0] = float(car.on_ground and not car.is_jumping)
+        out[1] = float(car.on_ground)
+        out[2] = sum(car.wheels_in_contact) / 4.0
+        out[3] = float(car.is_jumping)
+        out[4] = car.boost / C.BOOST_MAX
+        out[5] = float(controls.boost and car.boost > 0.0)
+        out[6] = float(np.sign(forward_speed))
+        out[7] = float(np.linalg.norm(car.vel)) / C.CAR_MAX_SPEED
+        out[8] = controls.steer
+        out[9] = math.atan2(forward[2], math.hypot(forward[0], forward[1])) / math.pi
+        out[10] = math.atan2(forward[1], forward[0]) / math.pi
+        out[11] = math.atan2(right[2], up[2]) / math.pi
+        out[12:15] = car.rot_mat.T @ (state.ball.pos - car.pos) / ARENA_DIAGONAL
+        if self.goal_sensor:
+            out[15:18] = (ATTACK_GOAL_CENTER - state.ball.pos * sign) / ARENA_DIAGONAL
+        return _finish(out, self._space)
+
+
+# ================================================================= distance rays
+RAY_CLASSES = ("ball", "car", "barrier", "wall")
+_MIN_MARCH_STEP = 1.0  # uu: the fallback march's smallest step (its worst-case overshoot into a surface)
+_MAX_MARCH_STEPS = 8192
+
+
+@njit(cache=True)
+def arena_ray_distances(origin, dirs, max_len):
+    """Distance along each unit ray in ``dirs`` (n, 3) from ``origin`` to the arena surface; inf if none
+    within ``max_len``. Uses ``arena_raycast``; when it reports a miss, the ray is marched on over the
+    distance field, because a sphere tracer running out of steps (a ray grazing the floor from a car's
+    centre, ~17 uu up) also reports a miss."""
+    n = dirs.shape[0]
+    out = np.full(n, np.inf)
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    for i in range(n):
+        dx, dy, dz = dirs[i, 0], dirs[i, 1], dirs[i, 2]
+        hit, t, _, _, _ = arena_raycast(ox, oy, oz, dx, dy, dz, max_len)
+        if hit:
+            out[i] = t
+            continue
+        t = 0.0
+        for _ in range(_MAX_MARCH_STEPS):
+            d = arena_distance(ox + dx * t, oy + dy * t, oz + dz * t)
+            if d < 0.02:
+                out[i] = t
+                break
+            t += max(d, _MIN_MARCH_STEP)
+            if t > max_len:
+                break
+    return out
+
+
+def ray_sphere(origin: np.ndarray, dirs: np.ndarray, center: np.ndarray, radius: float) -> np.ndarray:
+    """Entry distance of each unit ray into a sphere (0 if the origin is inside; inf if missed)."""
+    oc = origin - center
+    b = dirs @ oc
+    c = float(oc @ oc) - radius * radius
+    disc = b * b - c
+    with np.errstate(invalid="ignore"):
+        t = -b - np.sqrt(disc)
+    if c <= 0.0:
+        return np.zeros(len(dirs))
+    return np.where((disc >= 0.0) & (t >= 0.0), t, np.inf)
+
+
+def ray_boxes(origin: np.ndarray, dirs: np.ndarray, centers: np.ndarray, axes: np.ndarray,
+              half: np.ndarray) -> np.ndarray:
+    """Entry distances (n_rays, n_boxes) into oriented boxes (slab test; 0 if the origin is inside, inf if
+    missed). ``axes[m]`` holds box ``m``'s unit axes as columns; ``half[m]`` its half extents along them."""
+    if len(centers) == 0:
+        return np.full((len(dirs), 0), np.inf)
+    o_local = np.einsum("mik,mi->mk", axes, origin[None, :] - centers)  # (m, 3)
+    d_local = np.einsum("mik,ni->nmk", axes, dirs)  # (n, m, 3)
+    parallel = np.abs(d_local) < 1e-12
+    inside_slab = np.abs(o_local) <= half  # (m, 3)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (-half - o_local) / d_local
+        t2 = (half - o_local) / d_local
+    t_near = np.where(parallel, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2))
+    t_far = np.where(parallel, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2))
+    enter, leave = t_near.max(axis=2), t_far.min(axis=2)
+    hit = (enter <= leave) & (leave >= 0.0)
+    return np.where(hit, np.maximum(enter, 0.0), np.inf)
+
+
+class RaySensor(ObsBuilder):
+    """A fan of ``n_rays`` distance rays across the car's front, 5 numbers per ray.
+
+    Rays start at the car's centre and lie in the car's forward/right plane, at angles
+    ``linspace(-fan_deg / 2, +fan_deg / 2, n_rays)`` from forward (negative: to the car's left; a single
+    ray points straight ahead), so ``fan_deg`` is the fan's full width. Ray ``k`` fills slots
+    ``5k .. 5k+4``:
+
+    ====== =================================================================== ========
+    offset value                                                               range
+    ====== =================================================================== ========
+    0      distance to the nearest hit / ``reach_uu`` (1.0 when nothing within) [0, 1]
+    1      hit the ball (sphere of radius 91.25 at the ball's centre)           {0, 1}
+    2      hit another car (its hitbox: an oriented box; demoed cars are gone)  {0, 1}
+    3      hit a barrier (``state.obstacles``, axis-aligned boxes)              {0, 1}
+    4      hit the arena (walls, floor, ceiling, goals: ``arena_raycast``)      {0, 1}
+    ====== =================================================================== ========
+
+    The nearest hit wins; the one-hot is all zero when nothing is within reach. Hitboxes come from
+    ``state.car_configs`` (the octane preset for a car without one). The own car is never hit. Everything
+    is in the car's own frame, so the sensor is identical for both teams without mirroring.
+    """
+
+    def __init__(self, n_rays: int = 8, fan_deg: float = 70.0, reach_uu: float = 4000.0):
+        if isinstance(n_rays, bool) or not isinstance(n_rays, (int, np.integer)) or not 1 <= n_rays <= 256:
+            raise ValueError(f"n_rays: must be an int in 1..256, got {n_rays!r}")
+        if isinstance(fan_deg, bool) or not isinstance(fan_deg, (int, float)) or not 0.0 <= fan_deg <= 360.0:
+            raise ValueError(f"fan_deg: must be a number in [0, 360], got {fan_deg!r}")
+        if (isinstance(reach_uu, bool) or not isinstance(reach_uu, (int, float)) or not math.isfinite(reach_uu)
+                or reach_uu <= 0.0):
+            raise ValueError(f"reach_uu: must be a finite number > 0, got {reach_uu!r}")
+        self.n_rays, self.fan_deg, self.reach_uu = int(n_rays), float(fan_deg), float(reach_uu)
+        half = math.radians(self.fan_deg) / 2.0
+        self.angles = np.linspace(-half, half, self.n_rays) if self.n_rays > 1 else np.zeros(1)
+        self.size = 5 * self.n_rays
+        self._space = _box([0.0] * self.size, [1.0] * self.size)
+        self._octane = get_preset("octane")
+
+    def space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        _check_sizes(blue_size, orange_size)
+        return self._space
+
+    def ray_directions(self, rot_mat: np.ndarray) -> np.ndarray:
+        """(n_rays, 3) unit world directions: cos(a) forward + sin(a) right."""
+        return np.cos(self.angles)[:, None] * rot_mat[:, 0] + np.sin(self.angles)[:, None] * rot_mat[:, 1]
+
+    def hits(self, agent: str, state: GameState) -> tuple[np.ndarray, np.ndarray]:
+        """Per ray: the nearest hit distance (inf if none within reach) and its class index into
+        ``RAY_CLASSES`` (-1 if none)."""
+        car = state.cars[agent]
+        origin = car.pos
+        dirs = self.ray_directions(car.rot_mat)
+        dist = np.full((self.n_rays, len(RAY_CLASSES)), np.inf)
+        dist[:, 0] = ray_sphere(origin, dirs, state.ball.pos, C.BALL_RADIUS)
+        others = [(name, other) for name, other in state.cars.items() if name != agent and not other.is_demoed]
+        if others:
+            centers, axes, half = [], [], []
+            for name, other in others:
+                cfg = state.car_configs.get(name) or self._octane
+                centers.append(other.pos + other.rot_mat @ np.asarray(cfg.hitbox_offset, dtype=np.float64))
+                axes.append(other.rot_mat)
+                half.append(np.asarray(cfg.hitbox_size, dtype=np.float64) / 2.0)
+            dist[:, 1] = ray_boxes(origin, dirs, np.array(centers), np.array(axes), np.array(half)).min(axis=1)
+        if state.obstacles:
+            centers = np.array([np.asarray(ob.center, dtype=np.float64) for ob in state.obstacles])
+            half = np.array([np.asarray(ob.half_extents, dtype=np.float64) for ob in state.obstacles])
+            axes = np.broadcast_to(np.eye(3), (len(centers), 3, 3))
+            dist[:, 2] = ray_boxes(origin, dirs, centers, axes, half).min(axis=1)
+        dist[:, 3] = arena_ray_distances(np.ascontiguousarray(origin), np.ascontiguousarray(dirs), self.reach_uu)
+        cls = np.argmin(dist, axis=1)
+        nearest = dist[np.arange(self.n_rays), cls]
+        within = nearest <= self.reach_uu
+        return np.where(within, nearest, np.inf), np.where(within, cls, -1)
+
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        agent_team(agent)  # validates the name
+        out = np.zeros((self.n_rays, 5))
+        out[:, 0] = 1.0
+        if agent in state.cars:
+            nearest, cls = self.hits(agent, state)
+            seen = cls >= 0
+            out[seen, 0] = nearest[seen] / self.reach_uu
+            out[np.nonzero(seen)[0], 1 + cls[seen]] = 1.0
+        return _finish(out.ravel(), self._space)
+
+
+# ================================================================= the full state, team-relative
+CAR_FEATURES = ("pos_x", "pos_y", "pos_z", "vel_x", "vel_y", "vel_z", "ang_vel_x", "ang_vel_y", "ang_vel_z",
+                "forward_x", "forward_y", "forward_z", "up_x", "up_y", "up_z", "boost", "on_ground",
+                "has_flip", "is_demoed", "present")
+_CAR_LOW = [-1.0] * 15 + [0.0] * 5
+BALL_FEATURES = ("pos_x", "pos_y", "pos_z", "vel_x", "vel_y", "vel_z", "ang_vel_x", "ang_vel_y", "ang_vel_z")
+GAME_FEATURES = ("score_diff", "clock", "is_overtime", "kickoff_pending")
+_GAME_LOW = [-1.0, 0.0, 0.0, 0.0]
+
+
+_FEATURE_MIRROR = np.concatenate([np.tile(MIRROR, 5), np.ones(5)])  # team frame of CAR_FEATURES for orange
+
+
+def car_features(car: CarState | None) -> np.ndarray:
+    """``CAR_FEATURES`` of one car in the blue (world) frame, zeros for an absent car; multiply by
+    ``_FEATURE_MIRROR`` for orange's frame."""
+    if car is None:
+        return np.zeros(len(CAR_FEATURES))
+    return np.concatenate([
+        car.pos / POS_SCALE, car.vel / CAR_VEL_SCALE, car.ang_vel / CAR_ANG_VEL_SCALE,
+        car.rot_mat[:, 0], car.rot_mat[:, 2],
+        [car.boost / C.BOOST_MAX, float(car.on_ground), float(has_flip_available(car)), float(car.is_demoed), 1.0]])
+
+
+class TeamRelativeObs(ObsBuilder):
+    """The whole game from one agent's side, in its team frame (orange mirrored; see the module doc).
+
+    Layout for ``T = teammate slots`` and ``O = opponent slots`` (below), all scaled to [-1, 1]:
+
+    ================= ======== ==============================================================================
+    block             size     contents
+    ================= ======== ==============================================================================
+    self              20       ``CAR_FEATURES``: pos / (4096, 6000, 2048), vel / 2300, ang_vel / 5.5,
+                               forward (3), up (3), boost / 100, on_ground, has_flip (on the ground, or
+                               airborne within 1.25 s of a jump with no double jump or flip used yet),
+                               is_demoed, present (1 for a car in ``state.cars``)
+    ball              9        pos / (4096, 6000, 2048), vel / 6000, ang_vel / 6
+    teammates         20 * T   ``CAR_FEATURES`` of each teammate, by index, self excluded
+    opponents         20 * O   ``CAR_FEATURES`` of each opponent, by index
+    boost pads        34       seconds until back / the pad's cooldown (0 = available), team-frame pad order
+    game              4        tanh((own - opponent score) / 3), clock_s / 300 (clipped to [0, 1]),
+                               is_overtime, kickoff_pending
+    ================= ======== ==============================================================================
+
+    ``T = max(team size - 1)`` and ``O = max(other team's size)`` over the teams that have cars, so every
+    agent gets the same shape; unused slots and cars absent from ``state.cars`` are zeros (``present`` 0).
+    A demoed car still appears with ``is_demoed`` 1. Sizes: 1v1 87, 2v2 127, 3v3 167, 4v4 207.
+
+    ``space(blue_size, orange_size)`` fixes the team sizes for later ``build`` calls; before it is called,
+    ``build`` infers them from the agent names in the state. The per-car features of the last state are
+    cached for the other agents of the same decision (keyed on the object, which is a read-only snapshot).
+    """
+
+    def __init__(self):
+        self._sizes: tuple[int, int] | None = None
+        self._spaces: dict[tuple[int, int], spaces.Box] = {}
+        self._cached_state: GameState | None = None  # the last state seen, held so its id cannot be reused
+        self._cached_cars: dict[str, np.ndarray] = {}
+
+    @staticmethod
+    def slots(blue_size: int, orange_size: int) -> tuple[int, int]:
+        """(teammate slots, opponent slots) for this team size."""
+        teams = [(own, other) for own, other in ((blue_size, orange_size), (orange_size, blue_size)) if own > 0]
+        return max(own - 1 for own, _ in teams), max(other for _, other in teams)
+
+    def size(self, blue_size: int, orange_size: int) -> int:
+        mates, opps = self.slots(blue_size, orange_size)
+        return len(CAR_FEATURES) * (1 + mates + opps) + len(BALL_FEATURES) + N_PADS + len(GAME_FEATURES)
+
+    def space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        _check_sizes(blue_size, orange_size)
+        self._sizes = (int(blue_size), int(orange_size))
+        return self._make_space(blue_size, orange_size)
+
+    def _make_space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        key = (int(blue_size), int(orange_size))
+        if key not in self._spaces:
+            mates, opps = self.slots(blue_size, orange_size)
+            low = _CAR_LOW + [-1.0] * len(BALL_FEATURES) + _CAR_LOW * (mates + opps) + [0.0] * N_PADS + _GAME_LOW
+            self._spaces[key] = _box(low, [1.0] * len(low))
+        return self._spaces[key]
+
+    def _team_sizes(self, state: GameState) -> tuple[int, int]:
+        if self._sizes is not None:
+            return self._sizes
+        sizes = [0, 0]
+        for name in list(state.cars) + list(state.last_controls) + list(state.car_configs):
+            team = agent_team(name)
+            sizes[team] = max(sizes[team], int(name.rsplit("_", 1)[1]) + 1)
+        return sizes[0], sizes[1]
+
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        team = agent_team(agent)
+        blue_size, orange_size = self._team_sizes(state)
+        own_size, other_size = (blue_size, orange_size) if team == BLUE else (orange_size, blue_size)
+        index = int(agent.rsplit("_", 1)[1])
+        if not 0 <= index < own_size:
+            raise ValueError(f"agent: {agent!r} is not in a {blue_size}v{orange_size} game")
+        for name in state.cars:
+            t, i = agent_team(name), int(name.rsplit("_", 1)[1])
+            if i >= (blue_size, orange_size)[t]:
+                raise ValueError(f"state.cars: {name!r} is not in a {blue_size}v{orange_size} game")
+        mates_n, opps_n = self.slots(blue_size, orange_size)
+        if self._cached_state is not state:  # every agent of one decision shares the per-car features
+            self._cached_cars = {name: car_features(car) for name, car in state.cars.items()}
+            self._cached_state = state
+        sign = team_sign(agent)
+        feature_sign = _FEATURE_MIRROR if team != BLUE else 1.0
+        absent = np.zeros(len(CAR_FEATURES))
+
+        def features(name: str) -> np.ndarray:
+            return self._cached_cars[name] * feature_sign if name in self._cached_cars else absent
+        own, other = TEAM_NAMES[team], TEAM_NAMES[1 - team]
+        mates = [f"{own}_{i}" for i in range(own_size) if i != index]
+        opps = [f"{other}_{i}" for i in range(other_size)]
+        ball = state.ball
+        parts = [features(agent),
+                 ball.pos * sign / POS_SCALE, ball.vel * sign / BALL_VEL_SCALE,
+                 ball.ang_vel * sign / BALL_ANG_VEL_SCALE]
+        parts += [features(name) for name in mates] + [absent] * (mates_n - len(mates))
+        parts += [features(name) for name in opps] + [absent] * (opps_n - len(opps))
+        timers = np.asarray(state.pad_timers, dtype=np.float64) / PAD_COOLDOWN
+        parts.append(timers if team == BLUE else timers[PAD_MIRROR])
+        own_score, other_score = state.score[team], state.score[1 - team]
+        parts.append([math.tanh((own_score - other_score) / SCORE_DIFF_SCALE), state.clock_s / CLOCK_SCALE_S,
+                      float(state.is_overtime), float(state.kickoff_pending)])
+        space = self._make_space(blue_size, orange_size)
+        return _finish(np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts]), space)
+
+
+# ================================================================= composition and the registry
+class CombinedObs(ObsBuilder):
+    """The concatenation of several builders' observations, in order (e.g. seed sensors + rays)."""
+
+    def __init__(self, builders: Sequence[ObsBuilder]):
+        builders = list(builders)
+        if not builders or not all(isinstance(b, ObsBuilder) for b in builders):
+            raise ValueError(f"builders: expected a non-empty list of ObsBuilder, got {builders!r}")
+        self.builders = builders
+
+    def space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        parts = [b.space(blue_size, orange_size) for b in self.builders]
+        return _box(np.concatenate([p.low for p in parts]), np.concatenate([p.high for p in parts]))
+
+    def reset(self, state: GameState) -> None:
+        for b in self.builders:
+            b.reset(state)
+
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        return np.concatenate([b.build(agent, state) for b in self.builders]).astype(np.float32)
+
+
+OBS_BUILDERS: dict[str, type[ObsBuilder]] = {
+    "seed_sensors": SeedSensors, "ray": RaySensor, "team_relative": TeamRelativeObs}
+
+
+def _construct(name: str, kwargs: dict) -> ObsBuilder:
+    if name not in OBS_BUILDERS:
+        raise ValueError(f"observation: unknown observation builder {name!r}; allowed: {sorted(OBS_BUILDERS)} "
+                         f"or several joined with '+'")
+    cls = OBS_BUILDERS[name]
+    allowed = [p for p in inspect.signature(cls.__init__).parameters if p != "self"]
+    unknown = sorted(set(kwargs) - set(allowed))
+    if unknown:
+        raise ValueError(f"observation.{name}: unknown option(s) {unknown}; allowed: {allowed}")
+    return cls(**kwargs)
+
+
+def make_obs_builder(name: str, **kwargs) -> ObsBuilder:
+    """A builder by registry name, with its options: ``make_obs_builder("ray", n_rays=12)``.
+
+    Several names joined with ``+`` build a ``CombinedObs`` in that order; each part's options then go in a
+    mapping under its name: ``make_obs_builder("seed_sensors+ray", ray={"n_rays": 12})``.
+    """
+    if not isinstance(name, str):
+        raise ValueError(f"observation: expected a builder name, got {name!r}")
+    parts = [p.strip() for p in name.split("+")]
+    if len(parts) == 1:
+        return _construct(parts[0], kwargs)
+    for p in parts:
+        if p not in OBS_BUILDERS:
+            _construct(p, {})  # raises, naming the allowed ones
+    unknown = sorted(set(kwargs) - set(parts))
+    if unknown:
+        raise ValueError(f"observation: unknown option(s) {unknown} for {name!r}; allowed: {parts} "
+                         f"(each a mapping of that builder's options)")
+    for key, value in kwargs.items():
+        if not isinstance(value, dict):
+            raise ValueError(f"observation.{key}: expected a mapping of options, got {value!r}")
+    return CombinedObs([_construct(p, dict(kwargs.get(p, {}))) for p in parts])

@@ -1,0 +1,125 @@
+"""PettingZoo's own tests for every team size, plus the multi-step determinism they don't check."""
+import numpy as np
+import pytest
+from pettingzoo.test import api_test, max_cycles_test, parallel_api_test, parallel_seed_test, render_test, state_test
+from pettingzoo.utils.conversions import parallel_to_aec
+
+import rocketdrl_ma
+from rocketdrl_ma.policies.scripted import make_scripted
+
+TRAINING = {"kickoff_countdown_s": 0.0}
+
+
+def make(team_size=1, **kw):
+    return rocketdrl_ma.parallel_env(f"matches/{team_size}v{team_size}.yaml", **{**TRAINING, **kw})
+
+
+@pytest.mark.parametrize("team_size", [1, 2, 3, 4])
+def test_parallel_api(team_size):
+    env = make(team_size)
+    parallel_api_test(env, num_cycles=300)
+    env.close()
+
+
+@pytest.mark.parametrize("team_size", [1, 4])
+def test_aec_api(team_size):
+    env = rocketdrl_ma.env(f"matches/{team_size}v{team_size}.yaml", **TRAINING)
+    api_test(env, num_cycles=300)
+    env.close()
+
+
+@pytest.mark.parametrize("team_size", [1, 2, 3, 4])
+def test_parallel_seed(team_size):
+    parallel_seed_test(lambda: make(team_size), num_cycles=100)
+
+
+def test_max_cycles():
+    max_cycles_test(rocketdrl_ma)
+
+
+def test_render_modes():
+    render_test(lambda render_mode=None: rocketdrl_ma.env(render_mode=render_mode, **TRAINING))
+
+
+@pytest.mark.parametrize("team_size", [1, 2, 3, 4])
+def test_state(team_size):
+    par = make(team_size)
+    aec = parallel_to_aec(make(team_size))
+    state_test(aec, par)
+    par.close()
+    aec.close()
+
+
+@pytest.mark.parametrize("team_size", [1, 3])
+def test_same_seed_and_actions_are_bit_identical_for_1000_steps(team_size):
+    envs = [make(team_size, action="continuous") for _ in range(2)]
+    obs = [e.reset(seed=123)[0] for e in envs]
+    for a in obs[0]:
+        assert np.array_equal(obs[0][a], obs[1][a])
+    rng = np.random.default_rng(0)
+    for step in range(1000):
+        actions = {a: rng.uniform(-1, 1, 8).astype(np.float32) for a in envs[0].agents}
+        outs = [e.step(actions) for e in envs]
+        for a in actions:
+            assert np.array_equal(outs[0][0][a], outs[1][0][a]), (step, a)
+            assert outs[0][1][a] == outs[1][1][a]
+        if not envs[0].agents:
+            obs = [e.reset(seed=step)[0] for e in envs]
+    for e in envs:
+        e.close()
+
+
+def test_observations_stay_in_their_space_for_every_builder():
+    for name in ("team_relative", "seed_sensors", "ray"):
+        env = make(2, observation=name)
+        obs, _ = env.reset(seed=1)
+        for _ in range(60):
+            for a, o in obs.items():
+                assert env.observation_space(a).contains(o), (name, a)
+            obs, *_ = env.step({a: env.action_space(a).sample() for a in env.agents})
+        env.close()
+
+
+def test_bad_actions_name_the_agent():
+    env = make(1)
+    env.reset(seed=0)
+    good = {a: np.zeros(8, np.float32) for a in env.agents}
+    with pytest.raises(ValueError, match="blue_7"):
+        env.step({**good, "blue_7": np.zeros(8, np.float32)})
+    with pytest.raises(ValueError, match="orange_0"):
+        env.step({**good, "orange_0": np.full(8, np.nan, np.float32)})
+    with pytest.raises(ValueError, match="blue_0"):
+        env.step({**good, "blue_0": np.zeros(3, np.float32)})
+    env.close()
+
+
+def test_unknown_config_keys_are_named():
+    with pytest.raises(ValueError, match="clock_seconds"):
+        make(1, clock_seconds=10)
+    with pytest.raises(ValueError, match="team_size"):
+        rocketdrl_ma.parallel_env("matches/1v1.yaml", team_size="two")
+    with pytest.raises(ValueError, match="info_format"):
+        make(1, info_format="tensors")
+    with pytest.raises(ValueError, match="allowed"):
+        make(1, rewards={"goals": 1.0})
+
+
+def test_numeric_infos_keep_their_keys_and_count_this_agents_events():
+    env = make(1, info_format="numeric", rewards={"touch": 1.0})
+    _, infos = env.reset(seed=3)
+    keys = set(infos["blue_0"])
+    assert {"score_blue", "score_orange", "clock_s", "overtime", "touch", "reward_touch"} <= keys
+    assert all(isinstance(v, float) for v in infos["blue_0"].values())
+    chaser = make_scripted("ball_chaser")
+    touches = 0.0
+    for _ in range(120):
+        state = env.unwrapped._state
+        actions = {a: env.action_parser.encode(chaser.act(a, state)) for a in env.agents}
+        _, rewards, _, _, infos = env.step(actions)
+        assert all(set(info) == keys for info in infos.values())
+        touches += infos["blue_0"]["touch"] + infos["orange_0"]["touch"]
+        assert rewards["blue_0"] == infos["blue_0"]["reward_touch"]
+        if touches:
+            break
+    assert touches >= 1.0
+    env.close()
