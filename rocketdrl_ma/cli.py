@@ -1,12 +1,18 @@
-"""Command line: ``rocketdrl-ma play CONFIG --blue BOT --orange BOT [--video out.mp4]``.
+"""Command line: ``rocketdrl-ma play | serve | bot | watch | train | eval | league``.
 
 ``play`` runs a full match of a config between scripted bots, headless, with a progress bar, and prints
-the final score and the events (``make demo`` runs a 1v1 with a one-minute clock).
+the final score and the events (``make demo`` runs a 1v1 with a one-minute clock). The other commands
+live next to the code they drive: each module in ``COMMAND_MODULES`` has ``add_commands(subparsers)``,
+which adds its subcommands with ``set_defaults(run=function)``; ``run(args)`` returns the exit code.
+Those modules must import only the standard library at their top, so ``--help`` stays fast.
 """
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
+
+COMMAND_MODULES: tuple[str, ...] = ()
 
 
 def play(config: str, blue: str, orange: str, video: str | None, seed: int, clock_s: float | None,
@@ -63,6 +69,11 @@ def _describe(event: dict, tick_rate: int) -> str:
     return f"  {t:7.1f} s  overtime"
 
 
+def _run_play(args: argparse.Namespace) -> int:
+    play(args.config, args.blue, args.orange, args.video, args.seed, args.clock)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rocketdrl-ma")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -73,11 +84,11 @@ def main(argv: list[str] | None = None) -> int:
     p_play.add_argument("--video", default=None, help="write an mp4 or gif of the match here")
     p_play.add_argument("--clock", type=float, default=None, help="override the match clock (s)")
     p_play.add_argument("--seed", type=int, default=0)
+    p_play.set_defaults(run=_run_play)
+    for module in COMMAND_MODULES:
+        importlib.import_module(module).add_commands(sub)
     args = parser.parse_args(argv)
-    if args.command == "play":
-        play(args.config, args.blue, args.orange, args.video, args.seed, args.clock)
-        return 0
-    return 2
+    return args.run(args)
 
 
 if __name__ == "__main__":
