@@ -1,4 +1,6 @@
 """PettingZoo's own tests for every team size, plus the multi-step determinism they don't check."""
+import types
+
 import numpy as np
 import pytest
 from pettingzoo.test import api_test, max_cycles_test, parallel_api_test, parallel_seed_test, render_test, state_test
@@ -21,7 +23,7 @@ def test_parallel_api(team_size):
     env.close()
 
 
-@pytest.mark.parametrize("team_size", [1, 4])
+@pytest.mark.parametrize("team_size", [1, 2, 3, 4])
 def test_aec_api(team_size):
     env = rocketdrl_ma.env(f"matches/{team_size}v{team_size}.yaml", **TRAINING)
     api_test(env, num_cycles=300)
@@ -33,12 +35,19 @@ def test_parallel_seed(team_size):
     parallel_seed_test(lambda: make(team_size), num_cycles=100)
 
 
-def test_max_cycles():
-    max_cycles_test(rocketdrl_ma)
+@pytest.mark.parametrize("team_size", [1, 2, 3, 4])
+def test_max_cycles(team_size):
+    config = f"matches/{team_size}v{team_size}.yaml"
+    module = types.SimpleNamespace(
+        parallel_env=lambda **kw: rocketdrl_ma.parallel_env(config, **kw),
+        env=lambda **kw: rocketdrl_ma.env(config, **kw))
+    max_cycles_test(module)
 
 
-def test_render_modes():
-    render_test(lambda render_mode=None: rocketdrl_ma.env(render_mode=render_mode, **TRAINING))
+@pytest.mark.parametrize("team_size", [1, 2, 3, 4])
+def test_render_modes(team_size):
+    render_test(lambda render_mode=None: rocketdrl_ma.env(f"matches/{team_size}v{team_size}.yaml",
+                                                          render_mode=render_mode, **TRAINING))
 
 
 @pytest.mark.parametrize("team_size", [1, 2, 3, 4])
@@ -50,7 +59,7 @@ def test_state(team_size):
     aec.close()
 
 
-@pytest.mark.parametrize("team_size", [1, 3])
+@pytest.mark.parametrize("team_size", [1, 2, 3, 4])
 def test_same_seed_and_actions_are_bit_identical_for_1000_steps(team_size):
     envs = [make(team_size, action="continuous") for _ in range(2)]
     obs = [e.reset(seed=123)[0] for e in envs]
