@@ -10,7 +10,7 @@ import numpy as np
 
 from . import constants as C
 from .arena_geometry import is_inside_arena
-from .batch import ArenaBatch
+from .batch import ArenaBatch, _box_vector
 from .car_config import CarConfig
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BOOST, CS_DEMO_TIMER, CS_FLIP_TIME, CS_HANDBRAKE,
                          CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_FLIPPING,
@@ -119,6 +119,15 @@ class Ball:
     def get_radius() -> float:
         return C.BALL_RADIUS
 
+    @property
+    def is_frozen(self) -> bool:
+        """True while a ball placed at rest hangs where it is (until a touch or ``release``)."""
+        return bool(self._batch.ball_frozen[self._arena])
+
+    def release(self) -> None:
+        """Let a hanging ball fall from where it is."""
+        self._batch.ball_frozen[self._arena] = False
+
 
 class Arena:
     """One soccar arena: ``Arena(tick_rate=120)``, ``add_car``, ``step``, ``reset_kickoff`` (uu, z up)."""
@@ -201,6 +210,19 @@ class Arena:
         if y < -(C.GOAL_SCORE_THRESHOLD_Y + C.BALL_RADIUS):
             return 1
         return None
+
+    def add_static_box(self, center: np.ndarray, half_extents: np.ndarray) -> int:
+        """A fixed axis-aligned box (uu) the cars and the ball bounce off, e.g. a minigame barrier; returns its id."""
+        _check_inside("center", _box_vector("center", center), 0.0)
+        return self._batch.add_static_box(self.index, center, half_extents)
+
+    def move_static_box(self, box_id: int, center: np.ndarray) -> None:
+        """Move a static box (between rounds: it teleports, it does not push what is in the way)."""
+        _check_inside("center", _box_vector("center", center), 0.0)
+        self._batch.move_static_box(box_id, center)
+
+    def remove_static_box(self, box_id: int) -> None:
+        self._batch.remove_static_box(box_id)
 
     def boost_pad_timers(self) -> np.ndarray:
         """Seconds until each of the 34 pads (RLBot order) is active again; 0 = active."""

@@ -86,6 +86,13 @@ def mat_to_quat(m: np.ndarray) -> tuple[float, float, float, float]:
     return tuple(c / n for c in q)
 
 
+def _box_vector(name: str, value) -> np.ndarray:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name}: expected 3 finite numbers (uu), got {value!r}")
+    return arr
+
+
 class _CarSlot:
     """Bookkeeping of one car body; its per-tick numbers live in the batch arrays at ``index``."""
 
@@ -124,6 +131,7 @@ class ArenaBatch:
         self.origins = np.array([[(k % ARENA_GRID_COLUMNS) * ARENA_SPACING_UU,
                                   (k // ARENA_GRID_COLUMNS) * ARENA_SPACING_UU, 0.0] for k in range(n_arenas)])
         self._build_static_world()
+        self._static_boxes: dict[int, int] = {}  # PyBullet body id -> arena index
         self._ball_bodies = [self._make_ball(k) for k in range(n_arenas)]
         self.ball_pos = np.zeros((n_arenas, 3))
         self.ball_vel = np.zeros((n_arenas, 3))
@@ -471,6 +479,46 @@ class ArenaBatch:
         c, sn = math.cos(yaw), math.sin(yaw)
         rot = np.column_stack(([c, sn, 0.0], [-sn, c, 0.0], [0.0, 0.0, 1.0]))
         self.set_car(car_id, np.array([x, y, C.CAR_RESPAWN_Z]), rot, np.zeros(3), np.zeros(3))
+
+    # ------------------------------------------------------------------ static boxes (minigame barriers)
+    def add_static_box(self, arena: int, center_uu: np.ndarray, half_extents_uu: np.ndarray) -> int:
+        """An immovable axis-aligned box in ``arena`` that cars and the ball collide with; returns its id.
+
+        It has the arena's materials (friction and restitution 1.0, so each body's own value applies).
+        """
+        if not isinstance(arena, (int, np.integer)) or not 0 <= arena < self.n_arenas:
+            raise ValueError(f"arena: must be an index in 0..{self.n_arenas - 1}, got {arena!r}")
+        center = _box_vector("center_uu", center_uu)
+        half = _box_vector("half_extents_uu", half_extents_uu)
+        if np.any(half <= 0.0):
+            raise ValueError(f"half_extents_uu: must all be > 0, got {half.tolist()}")
+        cid = self.client
+        shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=(half * M_PER_UU).tolist(), physicsClientId=cid)
+        body = pb.createMultiBody(0, shape, basePosition=((center + self.origins[arena]) * M_PER_UU).tolist(),
+                                  physicsClientId=cid)
+        pb.changeDynamics(body, -1, lateralFriction=1.0, restitution=1.0, rollingFriction=0.0,
+                          spinningFriction=0.0, physicsClientId=cid)
+        self._static_set.add(body)  # cars touching it count as touching the arena (auto-flip, auto-roll)
+        self._static_boxes[body] = int(arena)
+        return body
+
+    def move_static_box(self, box_id: int, center_uu: np.ndarray) -> None:
+        """Put a static box's centre at ``center_uu`` (between rounds; it does not sweep through bodies)."""
+        arena = self._static_box_arena(box_id)
+        center = _box_vector("center_uu", center_uu)
+        pb.resetBasePositionAndOrientation(box_id, ((center + self.origins[arena]) * M_PER_UU).tolist(),
+                                           (0, 0, 0, 1), physicsClientId=self.client)
+
+    def remove_static_box(self, box_id: int) -> None:
+        self._static_box_arena(box_id)
+        pb.removeBody(box_id, physicsClientId=self.client)
+        self._static_set.discard(box_id)
+        del self._static_boxes[box_id]
+
+    def _static_box_arena(self, box_id: int) -> int:
+        if box_id not in self._static_boxes:
+            raise ValueError(f"box_id: no static box {box_id!r}; boxes are {sorted(self._static_boxes)}")
+        return self._static_boxes[box_id]
 
     def clear_events(self) -> None:
         self.events.clear()
