@@ -60,8 +60,14 @@ class ObservingPolicy(Policy):
         return self.action_parser.parse(agent, self.act(self.obs_builder.build(agent, state)), state)
 
 
+def _load_checkpoint(path: str) -> Policy:
+    # torch is imported only when a checkpoint is actually loaded
+    from .ppo.checkpoint import load_checkpoint_policy
+    return load_checkpoint_policy(path)
+
+
 #: kind -> loader of the text after ``kind:``; modules add their kinds with ``register_policy_kind``.
-POLICY_KINDS: dict[str, Callable[[str], Policy]] = {"scripted": ScriptedPolicy}
+POLICY_KINDS: dict[str, Callable[[str], Policy]] = {"scripted": ScriptedPolicy, "checkpoint": _load_checkpoint}
 
 
 def register_policy_kind(kind: str, loader: Callable[[str], Policy]) -> None:

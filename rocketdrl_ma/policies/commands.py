@@ -1,0 +1,49 @@
+"""``rocketdrl-ma train CONFIG`` and ``rocketdrl-ma eval CHECKPOINT --episodes N`` (standard library at the top)."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def _run_train(args: argparse.Namespace) -> int:
+    from rocketdrl_ma.policies.ppo import load_train_config, train
+
+    overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
+    if args.seed is not None:
+        overrides["seed"] = args.seed
+    cfg = load_train_config(args.config, overrides)
+    name = Path(args.config).stem
+    run_dir = Path(args.run_dir or Path("runs") / name)
+    out = Path(args.out or run_dir / "final.pt")
+    result = train(cfg, out=out, run_dir=run_dir, resume=args.resume, progress=not args.quiet)
+    for steps, success, ret, episodes in result.history:
+        print(f"steps {steps:>10,d}  success {success:6.1%}  return {ret:+8.2f}  episodes {episodes}")
+    print(f"checkpoint: {result.checkpoint} ({result.agent_steps:,d} agent steps); TensorBoard logs: {run_dir}")
+    return 0
+
+
+def _run_eval(args: argparse.Namespace) -> int:
+    from rocketdrl_ma.policies.ppo import evaluate
+
+    r = evaluate(args.checkpoint, args.episodes, seed=args.seed, n_envs=args.n_envs)
+    print(f"{args.checkpoint}: success {r.success_rate:.1%} over {r.episodes} episodes, "
+          f"mean return {r.mean_return:+.2f}, mean length {r.mean_length:.1f} decisions")
+    return 0
+
+
+def add_commands(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("train", help="train a PPO policy (torchrl) from a training YAML, e.g. policies/penalty.yaml")
+    p.add_argument("config", help="training YAML: ML-Agents PPO keys plus env, env_overrides, n_envs, seed")
+    p.add_argument("--out", default=None, help="final checkpoint path (default RUN_DIR/final.pt)")
+    p.add_argument("--run-dir", default=None, help="TensorBoard logs and periodic checkpoints (default runs/NAME)")
+    p.add_argument("--resume", default=None, help="continue from this checkpoint (its step count and optimizer)")
+    p.add_argument("--max-steps", type=int, default=None, help="override max_steps (agent steps)")
+    p.add_argument("--seed", type=int, default=None, help="override the config's seed")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(run=_run_train)
+    e = sub.add_parser("eval", help="greedy evaluation of a checkpoint: success rate and mean return")
+    e.add_argument("checkpoint", help="a .pt checkpoint with its .json next to it")
+    e.add_argument("--episodes", type=int, default=200)
+    e.add_argument("--n-envs", type=int, default=4, help="env copies played side by side")
+    e.add_argument("--seed", type=int, default=10_000, help="first env seed (training uses 0..n_envs-1)")
+    e.set_defaults(run=_run_eval)

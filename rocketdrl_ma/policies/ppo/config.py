@@ -1,0 +1,114 @@
+"""Training configs: the ML-Agents PPO keys with their ML-Agents meanings, plus the env to train on.
+
+A config is a flat YAML mapping. Hyperparameters (as in ML-Agents' ``trainer_config``):
+
+- ``batch_size``: experiences per gradient step (minibatch); ``buffer_size``: experiences collected
+  per policy update (over every agent of every env copy); ``num_epoch``: passes over the buffer.
+- ``learning_rate`` and ``learning_rate_schedule`` (``linear``: decays to 0 at ``max_steps``; ``constant``).
+- ``beta``: entropy bonus coefficient; ``epsilon``: PPO clip range; ``lambd``: GAE lambda;
+  ``gamma``: discount; ``strength``: scale of the env reward.
+- ``normalize``: running mean/variance normalisation of observations; ``hidden_units``, ``num_layers``:
+  the MLPs of the actor and the critic.
+- ``time_horizon``: experiences of one agent before its trajectory is cut and bootstrapped with the
+  critic's value; ``max_steps``: agent steps to train for; ``summary_freq``: agent steps between
+  TensorBoard summaries; ``checkpoint_interval`` and ``keep_checkpoints``: periodic checkpoints.
+
+And the rest: ``env`` (a match or minigame YAML), ``env_overrides`` (its keys to replace), ``n_envs``
+(env copies feeding the trainer), ``seed``, ``device`` (``auto``: GPU if present, else CPU).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rocketdrl_ma.config import load_config, resolve_config_path
+
+#: every key a training config may hold, with its default (ML-Agents' PPO defaults where it has one)
+TRAIN_DEFAULTS: dict[str, Any] = {
+    "env": None,
+    "env_overrides": {},
+    "n_envs": 8,
+    "seed": 0,
+    "device": "auto",
+    "batch_size": 1024,
+    "buffer_size": 10240,
+    "learning_rate": 3.0e-4,
+    "learning_rate_schedule": "linear",
+    "beta": 5.0e-3,
+    "epsilon": 0.2,
+    "lambd": 0.95,
+    "num_epoch": 3,
+    "normalize": False,
+    "hidden_units": 128,
+    "num_layers": 2,
+    "gamma": 0.99,
+    "strength": 1.0,
+    "time_horizon": 64,
+    "max_steps": 500_000,
+    "summary_freq": 50_000,
+    "checkpoint_interval": 500_000,
+    "keep_checkpoints": 5,
+}
+SCHEDULES = ("linear", "constant")
+DEVICES = ("auto", "cpu", "cuda")
+POSITIVE_INTS = ("n_envs", "batch_size", "buffer_size", "num_epoch", "hidden_units", "num_layers", "time_horizon",
+                 "max_steps", "summary_freq", "checkpoint_interval", "keep_checkpoints")
+UNIT_INTERVAL = ("lambd", "gamma")
+
+
+def _check_number(key: str, value: Any, kind: type) -> None:
+    ok = isinstance(value, (int, float)) if kind is float else isinstance(value, int)
+    if isinstance(value, bool) or not ok:
+        raise ValueError(f"{key}: expected {'a number' if kind is float else 'an int'}, got {value!r}")
+
+
+def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
+    """Defaults filled in and every value checked; ValueError names the bad key and the allowed ones."""
+    if not isinstance(raw, dict):
+        raise ValueError(f"training config: expected a mapping of keys to values, got {type(raw).__name__}")
+    unknown = sorted(set(raw) - set(TRAIN_DEFAULTS))
+    if unknown:
+        raise ValueError(f"training config: unknown key(s) {unknown}; allowed: {sorted(TRAIN_DEFAULTS)}")
+    cfg = {**TRAIN_DEFAULTS, **raw}
+    if not isinstance(cfg["env"], str):
+        raise ValueError(f"env: expected the path of a match or minigame YAML, got {cfg['env']!r}")
+    if not isinstance(cfg["env_overrides"], dict):
+        raise ValueError(f"env_overrides: expected a mapping of env keys to values, got {cfg['env_overrides']!r}")
+    for key in POSITIVE_INTS:
+        _check_number(key, cfg[key], int)
+        if cfg[key] < 1:
+            raise ValueError(f"{key}: must be >= 1, got {cfg[key]}")
+    _check_number("seed", cfg["seed"], int)
+    for key in ("learning_rate", "beta", "epsilon", "lambd", "gamma", "strength"):
+        _check_number(key, cfg[key], float)
+        cfg[key] = float(cfg[key])
+    for key in UNIT_INTERVAL:
+        if not 0.0 <= cfg[key] <= 1.0:
+            raise ValueError(f"{key}: must be in [0, 1], got {cfg[key]}")
+    for key in ("learning_rate", "epsilon"):
+        if cfg[key] <= 0.0:
+            raise ValueError(f"{key}: must be > 0, got {cfg[key]}")
+    if cfg["beta"] < 0.0:
+        raise ValueError(f"beta: must be >= 0, got {cfg['beta']}")
+    if cfg["learning_rate_schedule"] not in SCHEDULES:
+        raise ValueError(f"learning_rate_schedule: {cfg['learning_rate_schedule']!r} is not one of {list(SCHEDULES)}")
+    if cfg["device"] not in DEVICES:
+        raise ValueError(f"device: {cfg['device']!r} is not one of {list(DEVICES)}")
+    if not isinstance(cfg["normalize"], bool):
+        raise ValueError(f"normalize: expected true or false, got {cfg['normalize']!r}")
+    if cfg["batch_size"] > cfg["buffer_size"]:
+        raise ValueError(f"batch_size: must be <= buffer_size ({cfg['buffer_size']}), got {cfg['batch_size']}")
+    # The env config is validated now, so a typo there fails before any training starts.
+    load_config(cfg["env"], cfg["env_overrides"])
+    return cfg
+
+
+def load_train_config(path: str | Path, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
+    """A training YAML (resolved like env configs: from the working directory or the repository)."""
+    with open(resolve_config_path(path)) as f:
+        raw = yaml.safe_load(f) or {}
+    if not isinstance(raw, dict):
+        raise ValueError(f"training config: {path} must hold a mapping of keys to values")
+    return validate_train_config({**raw, **(overrides or {})})

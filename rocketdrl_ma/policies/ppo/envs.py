@@ -1,0 +1,104 @@
+"""Many env copies as one batch of rows for the trainer: every agent of every copy is a row.
+
+All agents share one policy (for a match that is self-play against itself). A copy that ends is reset
+at once; ``step`` reports the finished episodes (return, length, success) and, for rows cut off by a
+time limit, their final observation so the trainer can bootstrap from it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+
+
+@dataclass
+class Episode:
+    """One agent's finished episode."""
+
+    agent_return: float
+    length: int
+    success: bool
+
+
+def episode_success(agent: str, info: dict) -> bool:
+    """A minigame's ``is_success``; in a match, the agent's team won."""
+    summary = info.get("summary", {})
+    if "is_success" in summary:
+        return bool(summary["is_success"])
+    if "is_success" in info:
+        return bool(info["is_success"])
+    return summary.get("winner") == agent.rpartition("_")[0]
+
+
+@dataclass
+class StepResult:
+    obs: np.ndarray            # [rows, obs_dim] observations to act on next (after any reset)
+    reward: np.ndarray         # [rows]
+    terminated: np.ndarray     # [rows] bool: the episode reached its end (no bootstrap)
+    truncated: np.ndarray      # [rows] bool: cut off by a time limit (bootstrap from final_obs)
+    final_obs: np.ndarray      # [rows, obs_dim]: the last observation of rows that ended, else obs
+    episodes: list[Episode]
+
+
+class EnvPool:
+    """``n_envs`` PettingZoo envs stepped one after another in this process."""
+
+    def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None):
+        overrides = {**(overrides or {}), "info_format": "full"}
+        self.envs = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_envs)]
+        first = self.envs[0]
+        self.agents = list(first.possible_agents)
+        self.n_rows = n_envs * len(self.agents)
+        self.observation_space: spaces.Box = first.observation_space(self.agents[0])
+        self.action_space: spaces.Space = first.action_space(self.agents[0])
+        self.seed = seed
+        self._returns = np.zeros(self.n_rows)
+        self._lengths = np.zeros(self.n_rows, dtype=np.int64)
+
+    def _rows(self, i: int) -> slice:
+        return slice(i * len(self.agents), (i + 1) * len(self.agents))
+
+    def reset(self) -> np.ndarray:
+        obs = np.zeros((self.n_rows, self.observation_space.shape[0]), np.float32)
+        for i, env in enumerate(self.envs):
+            o, _ = env.reset(seed=self.seed + i)
+            obs[self._rows(i)] = [o[a] for a in self.agents]
+        self._returns[:] = 0.0
+        self._lengths[:] = 0
+        return obs
+
+    def step(self, actions: np.ndarray) -> StepResult:
+        dim = self.observation_space.shape[0]
+        obs = np.zeros((self.n_rows, dim), np.float32)
+        final_obs = np.zeros_like(obs)
+        reward = np.zeros(self.n_rows, np.float32)
+        terminated = np.zeros(self.n_rows, bool)
+        truncated = np.zeros(self.n_rows, bool)
+        episodes: list[Episode] = []
+        for i, env in enumerate(self.envs):
+            rows = self._rows(i)
+            acts = {a: actions[rows][k] for k, a in enumerate(self.agents)}
+            o, r, term, trunc, infos = env.step(acts)
+            obs[rows] = [o[a] for a in self.agents]
+            reward[rows] = [r[a] for a in self.agents]
+            terminated[rows] = [term[a] for a in self.agents]
+            truncated[rows] = [trunc[a] and not term[a] for a in self.agents]
+            if not env.agents:  # every agent of a copy ends together
+                final_obs[rows] = obs[rows]
+                for k, agent in enumerate(self.agents):
+                    row = rows.start + k
+                    episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
+                                            episode_success(agent, infos[agent])))
+                o, _ = env.reset()
+                obs[rows] = [o[a] for a in self.agents]
+        done = terminated | truncated
+        self._returns = np.where(done, 0.0, self._returns + reward)
+        self._lengths = np.where(done, 0, self._lengths + 1)
+        return StepResult(obs, reward, terminated, truncated, final_obs, episodes)
+
+    def close(self) -> None:
+        for env in self.envs:
+            env.close()

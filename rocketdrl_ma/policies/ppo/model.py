@@ -1,0 +1,120 @@
+"""The actor-critic: separate MLPs for the policy and the value, and a running observation normaliser.
+
+A flat ``Box`` action space gets a Gaussian policy with a learned, state-independent standard
+deviation (the env receives the sample clipped to [-1, 1], the loss sees the raw sample); a
+``Discrete`` one (the lookup table) gets a categorical policy. The model is a plain ``nn.Module``, so
+its ``state_dict`` (normaliser statistics included) is the whole exported policy.
+"""
+from __future__ import annotations
+
+import numpy as np
+import torch
+from gymnasium import spaces
+from tensordict.nn import TensorDictModule
+from torch import nn
+from torchrl.modules import IndependentNormal, ProbabilisticActor, ValueOperator
+
+NORM_CLIP = 5.0  # normalised observations are clipped to +-5 standard deviations, as in ML-Agents
+
+
+def action_spec(space: spaces.Space) -> dict:
+    """The JSON-able description of an action space that the model needs."""
+    if isinstance(space, spaces.Box) and len(space.shape) == 1:
+        return {"kind": "box", "dim": int(space.shape[0])}
+    if isinstance(space, spaces.Discrete):
+        return {"kind": "discrete", "n": int(space.n)}
+    raise ValueError(f"action space: PPO supports a flat Box or a Discrete space, got {space}")
+
+
+class RunningNorm(nn.Module):
+    """Running mean and variance of observations (parallel Welford update); identity when disabled."""
+
+    def __init__(self, dim: int, enabled: bool):
+        super().__init__()
+        self.enabled = enabled
+        self.register_buffer("mean", torch.zeros(dim))
+        self.register_buffer("var", torch.ones(dim))
+        self.register_buffer("count", torch.tensor(1e-4))
+
+    @torch.no_grad()
+    def update(self, x: torch.Tensor) -> None:
+        if not self.enabled:
+            return
+        batch_mean, batch_var, n = x.mean(0), x.var(0, unbiased=False), x.shape[0]
+        delta, total = batch_mean - self.mean, self.count + n
+        self.mean += delta * n / total
+        self.var.copy_((self.var * self.count + batch_var * n + delta.square() * self.count * n / total) / total)
+        self.count.copy_(total)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if not self.enabled:
+            return x
+        return ((x - self.mean) / torch.sqrt(self.var + 1e-8)).clamp(-NORM_CLIP, NORM_CLIP)
+
+
+def mlp(n_in: int, n_out: int, hidden_units: int, num_layers: int, out_gain: float) -> nn.Sequential:
+    layers: list[nn.Module] = []
+    width = n_in
+    for _ in range(num_layers):
+        layers += [nn.Linear(width, hidden_units), nn.SiLU()]  # Swish, as ML-Agents uses
+        width = hidden_units
+    layers.append(nn.Linear(width, n_out))
+    for layer in layers:
+        if isinstance(layer, nn.Linear):  # orthogonal init; a small last layer starts near-uniform
+            nn.init.orthogonal_(layer.weight, np.sqrt(2.0))
+            nn.init.zeros_(layer.bias)
+    nn.init.orthogonal_(layers[-1].weight, out_gain)
+    return nn.Sequential(*layers)
+
+
+class GaussianHead(nn.Module):
+    def __init__(self, body: nn.Module, dim: int):
+        super().__init__()
+        self.body = body
+        self.log_std = nn.Parameter(torch.zeros(dim))
+
+    def forward(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        loc = self.body(obs)
+        return loc, self.log_std.exp().expand_as(loc)
+
+
+class PPOModel(nn.Module):
+    def __init__(self, obs_dim: int, action: dict, hidden_units: int, num_layers: int, normalize: bool):
+        super().__init__()
+        self.action = action
+        self.obs_norm = RunningNorm(obs_dim, normalize)
+        if action["kind"] == "box":
+            self.policy: nn.Module = GaussianHead(mlp(obs_dim, action["dim"], hidden_units, num_layers, 0.01),
+                                                  action["dim"])
+        else:
+            self.policy = mlp(obs_dim, action["n"], hidden_units, num_layers, 0.01)
+        self.value = mlp(obs_dim, 1, hidden_units, num_layers, 1.0)
+
+    def td_modules(self) -> tuple[ProbabilisticActor, ValueOperator]:
+        """torchrl views of the policy and the value over normalised ``"observation"`` (for ClipPPOLoss)."""
+        if self.action["kind"] == "box":
+            actor = ProbabilisticActor(
+                TensorDictModule(self.policy, in_keys=["observation"], out_keys=["loc", "scale"]),
+                in_keys=["loc", "scale"], out_keys=["action"], distribution_class=IndependentNormal,
+                return_log_prob=True)
+        else:
+            actor = ProbabilisticActor(
+                TensorDictModule(self.policy, in_keys=["observation"], out_keys=["logits"]),
+                in_keys=["logits"], out_keys=["action"], distribution_class=torch.distributions.Categorical,
+                return_log_prob=True)
+        return actor, ValueOperator(self.value, in_keys=["observation"])
+
+    @torch.no_grad()
+    def act_deterministic(self, obs: np.ndarray) -> np.ndarray:
+        """Greedy env actions for a batch of raw observations: the clipped mean, or the most likely index."""
+        x = self.obs_norm(torch.as_tensor(np.asarray(obs, np.float32)))
+        if self.action["kind"] == "box":
+            return self.policy(x)[0].clamp(-1.0, 1.0).numpy()
+        return self.policy(x).argmax(-1).numpy()
+
+
+def env_actions(action: dict, sampled: torch.Tensor) -> np.ndarray:
+    """What the env receives for the policy's samples: Box samples clipped into [-1, 1], indices as ints."""
+    if action["kind"] == "box":
+        return sampled.clamp(-1.0, 1.0).numpy()
+    return sampled.numpy().astype(np.int64)
