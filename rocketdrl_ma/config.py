@@ -38,16 +38,21 @@ def resolve_config_path(path: str | Path) -> Path:
 
 
 def mode_parameters(mode: str) -> dict[str, Any]:
-    """The mode's configurable parameters and their defaults, from its constructor (and the base class)."""
+    """The mode's configurable parameters and their defaults, from its constructor and, through ``**kwargs``,
+    its base classes' (a constructor without ``**kwargs`` fixes what its bases take, e.g. a one-car minigame)."""
     cls = GAME_MODES[mode]
     params: dict[str, Any] = {}
-    for klass in reversed(cls.__mro__):
+    for klass in cls.__mro__:
         if "__init__" not in vars(klass):
             continue
+        forwards = False
         for name, p in inspect.signature(klass.__init__).parameters.items():
+            forwards = forwards or p.kind == p.VAR_KEYWORD
             if name in ("self", "kwargs", "reward_weights") or p.kind in (p.VAR_KEYWORD, p.VAR_POSITIONAL):
                 continue
-            params[name] = p.default
+            params.setdefault(name, p.default)
+        if not forwards:
+            break
     if "team_size" in params:  # a symmetric mode sets both sides through team_size
         params.pop("blue_size", None)
         params.pop("orange_size", None)

@@ -47,3 +47,4 @@ class GameState:
     obstacles: tuple[Obstacle, ...] = ()
     events: list[dict] = field(default_factory=list)  # this decision's events, in tick order
     car_configs: dict[str, CarConfig] = field(default_factory=dict)  # hitbox preset of each car
+    mode_state: dict = field(default_factory=dict)  # a game mode's own flags its sensors read (minigames)

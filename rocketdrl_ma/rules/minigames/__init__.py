@@ -1,0 +1,5 @@
+"""The seed's minigames as game modes: Penalty, Barrier free kick, Aerial shot and the competitive Penalty duel."""
+from .penalty import Penalty
+from .shot import ShotMinigame, ShotSpawn
+
+__all__ = ["Penalty", "ShotMinigame", "ShotSpawn"]

@@ -1,0 +1,75 @@
+"""Every minigame through the PettingZoo env: PettingZoo's own tests, determinism, numeric infos, sensors."""
+import numpy as np
+import pytest
+from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test, state_test
+from pettingzoo.utils.conversions import parallel_to_aec
+
+import rocketdrl_ma
+
+CONFIGS = ["minigames/penalty.yaml"]
+SHORT = {"timeout_s": 3.0}  # short rounds: the tests see many episodes end
+
+
+@pytest.mark.parametrize("config", CONFIGS)
+def test_parallel_api(config):
+    env = rocketdrl_ma.parallel_env(config, **SHORT)
+    parallel_api_test(env, num_cycles=200)
+    env.close()
+
+
+@pytest.mark.parametrize("config", CONFIGS)
+def test_aec_api(config):
+    env = rocketdrl_ma.env(config, **SHORT)
+    api_test(env, num_cycles=200)
+    env.close()
+
+
+@pytest.mark.parametrize("config", CONFIGS)
+def test_parallel_seed(config):
+    parallel_seed_test(lambda: rocketdrl_ma.parallel_env(config, **SHORT), num_cycles=50)
+
+
+@pytest.mark.parametrize("config", CONFIGS)
+def test_state(config):
+    par = rocketdrl_ma.parallel_env(config, **SHORT)
+    aec = parallel_to_aec(rocketdrl_ma.parallel_env(config, **SHORT))
+    state_test(aec, par)
+    par.close()
+    aec.close()
+
+
+@pytest.mark.parametrize("config", CONFIGS)
+def test_same_seed_and_actions_give_the_same_episodes(config):
+    """Spawns, barrier placement and outcomes are a function of the seed (parallel_seed_test checks one step)."""
+    envs = [rocketdrl_ma.parallel_env(config, **SHORT) for _ in range(2)]
+    rng = np.random.default_rng(0)
+    for episode in range(3):
+        obs = [e.reset(seed=episode)[0] for e in envs]
+        assert all(np.array_equal(obs[0][a], obs[1][a]) for a in obs[0])
+        while envs[0].agents:
+            actions = {a: rng.uniform(-1, 1, envs[0].action_space(a).shape).astype(np.float32)
+                       for a in envs[0].agents}
+            outs = [e.step(actions) for e in envs]
+            for a in actions:
+                assert np.array_equal(outs[0][0][a], outs[1][0][a])
+                assert outs[0][1][a] == outs[1][1][a]
+        assert envs[1].agents == []
+    for e in envs:
+        e.close()
+
+
+@pytest.mark.parametrize("config", CONFIGS)
+def test_numeric_infos_keep_their_keys_and_report_success_at_the_end(config):
+    env = rocketdrl_ma.parallel_env(config, info_format="numeric", timeout_s=1.0)
+    _, infos = env.reset(seed=0)
+    keys = {a: set(info) for a, info in infos.items()}
+    assert {"goals", "misses", "is_success", "success_rate", "rounds_played", "clock_s"} <= keys["blue_0"]
+    rng = np.random.default_rng(1)
+    while env.agents:
+        actions = {a: rng.uniform(-1, 1, env.action_space(a).shape).astype(np.float32) for a in env.agents}
+        _, _, _, _, infos = env.step(actions)
+        for a, info in infos.items():
+            assert set(info) == keys[a] and all(isinstance(v, float) for v in info.values())
+    assert infos["blue_0"]["rounds_played"] == 1.0
+    assert infos["blue_0"]["goals"] + infos["blue_0"]["misses"] == 1.0
+    env.close()

@@ -1,0 +1,133 @@
+"""Minigame rules on real PyBullet worlds: scripted shots (set state, then controls), misses, timeouts, rounds."""
+import numpy as np
+import pytest
+
+import rocketdrl_ma
+from rocketdrl_ma.physics import BallState, CarState, yaw_rot_mat
+from rocketdrl_ma.physics import constants as C
+
+# seed action layout: throttle, steer, jump, boost, drift (buttons pressed above 0)
+DRIVE_BOOST = np.array([1.0, 0.0, -1.0, 1.0, -1.0], np.float32)
+IDLE = np.array([0.0, 0.0, -1.0, -1.0, -1.0], np.float32)
+
+
+def place(env, car_pos, ball_pos, car_vel=(0.0, 0.0, 0.0), ball_vel=(0.0, 0.0, 0.0), yaw=np.pi / 2, agent="blue_0"):
+    rules = env.unwrapped.rules
+    rules.cars[agent].set_state(CarState(pos=np.array(car_pos, float), vel=np.array(car_vel, float),
+                                         rot_mat=yaw_rot_mat(yaw), boost=100.0, on_ground=True,
+                                         wheels_in_contact=(True,) * 4))
+    rules.arena.ball.set_state(BallState(pos=np.array(ball_pos, float), vel=np.array(ball_vel, float)))
+    env.unwrapped._state = rules.game_state()
+
+
+def run(env, action=DRIVE_BOOST, agent="blue_0", max_steps=2000, others=IDLE):
+    """Step until the episode ends; returns (rewards of ``agent`` per step, the last infos, steps)."""
+    rewards, infos = [], {}
+    for _ in range(max_steps):
+        if not env.agents:
+            break
+        actions = {a: (action if a == agent else others) for a in env.agents}
+        _, r, term, trunc, infos = env.step(actions)
+        rewards.append(r[agent])
+    assert not env.agents, "the episode did not end"
+    return rewards, infos
+
+
+def straight_shot(env, x=0.0):
+    """The car 600 uu behind a ball 2000 uu out, both on the goal's axis (or at ``x``), driving at it."""
+    place(env, car_pos=(x, C.ARENA_EXTENT_Y - 2600.0, C.CAR_SPAWN_REST_Z),
+          ball_pos=(x, C.ARENA_EXTENT_Y - 2000.0, C.BALL_REST_Z), car_vel=(0.0, 1200.0, 0.0))
+
+
+# ------------------------------------------------------------------ penalty
+def test_penalty_scripted_shot_scores_and_gets_ten():
+    env = rocketdrl_ma.parallel_env("minigames/penalty.yaml")
+    env.reset(seed=0)
+    straight_shot(env)
+    rewards, infos = run(env)
+    info = infos["blue_0"]
+    assert rewards[-1] == pytest.approx(10.0 - 0.01)
+    assert all(r == pytest.approx(-0.01) for r in rewards[:-1])
+    assert info["reward_terms"]["goal"] == pytest.approx(10.0)
+    summary = info["summary"]
+    assert summary["is_success"] is True and summary["goals"] == 1 and summary["misses"] == 0
+    assert summary["stats"]["blue_0"]["touches"] >= 1 and summary["stats"]["blue_0"]["shots"] >= 1
+    assert 0.5 < summary["time_to_goal_s"] < 5.0
+    assert any(e["kind"] == "goal" and e["scorer"] == "blue_0" for e in info["events"])
+    env.close()
+
+
+@pytest.mark.parametrize("ball_pos, ball_vel, reason, overrides", [
+    ((2000.0, 4000.0, C.BALL_REST_Z), (0.0, 2500.0, 0.0), "wide", {}),   # into the end wall beside the goal
+    ((0.0, 4000.0, 900.0), (0.0, 2500.0, 0.0), "wide", {}),              # over the crossbar
+    ((0.0, 1000.0, C.BALL_REST_Z), (0.0, -3000.0, 0.0), "retreat", {}),  # back over the halfway line
+    ((0.0, -4000.0, C.BALL_REST_Z), (0.0, -3000.0, 0.0), "own_goal", {"miss_line_y": -C.ARENA_EXTENT_Y}),
+])
+def test_penalty_miss_gets_minus_ten_and_ends(ball_pos, ball_vel, reason, overrides):
+    env = rocketdrl_ma.parallel_env("minigames/penalty.yaml", **overrides)
+    env.reset(seed=1)
+    place(env, car_pos=(-2500.0, 0.0, C.CAR_SPAWN_REST_Z), ball_pos=ball_pos, ball_vel=ball_vel)
+    rewards, infos = run(env, action=IDLE)
+    assert rewards[-1] == pytest.approx(-10.0 - 0.01)
+    summary = infos["blue_0"]["summary"]
+    assert summary["is_success"] is False and summary["misses"] == 1
+    assert summary["results"][0]["reason"] == reason
+    assert len(rewards) < 100  # it ended on the miss, long before the timeout
+    env.close()
+
+
+def test_penalty_timeout_ends_the_episode_after_exactly_timeout_s():
+    env = rocketdrl_ma.parallel_env("minigames/penalty.yaml", timeout_s=2.0, tick_skip=5)
+    env.reset(seed=2)
+    rewards, infos = run(env, action=IDLE)
+    assert len(rewards) == 2.0 * C.TICK_RATE_HZ / 5
+    assert infos["blue_0"]["summary"]["results"][0]["reason"] == "timeout"
+    assert sum(rewards) == pytest.approx(-10.0 - 0.01 * len(rewards))
+    env.close()
+
+
+def test_rounds_accumulate_score_until_the_last_round():
+    env = rocketdrl_ma.parallel_env("minigames/penalty.yaml", rounds=3, timeout_s=2.5, info_format="numeric")
+    env.reset(seed=3)
+    straight_shot(env)
+    rewards, infos = run(env)  # round 1: the shot; rounds 2-3: driving straight from random spawns
+    info = infos["blue_0"]
+    assert info["rounds_played"] == 3.0 and info["goals"] >= 1.0 and info["goals"] + info["misses"] == 3.0
+    assert info["score_blue"] == info["goals"] and info["score_orange"] == info["misses"]
+    assert sum(rewards) == pytest.approx(10.0 * info["goals"] - 10.0 * info["misses"] - 0.01 * len(rewards))
+    env.close()
+
+
+def test_difficulty_zero_spawns_on_the_goal_axis_and_one_spreads_along_the_width():
+    env = rocketdrl_ma.parallel_env("minigames/penalty.yaml", difficulty=0.0)
+    xs = []
+    for seed in range(4):
+        env.reset(seed=seed)
+        state = env.unwrapped.rules.game_state()
+        assert state.ball.pos[0] == 0.0 and state.cars["blue_0"].pos[0] == 0.0
+        env.unwrapped.rules.set_difficulty(1.0)
+        env.reset(seed=seed)
+        state = env.unwrapped.rules.game_state()
+        xs.append(state.ball.pos[0])
+        assert state.ball.pos[1] == pytest.approx(C.ARENA_EXTENT_Y - 2000.0)
+        assert state.cars["blue_0"].pos[1] == pytest.approx(C.ARENA_EXTENT_Y - 3000.0)
+        env.unwrapped.rules.set_difficulty(0.0)
+    assert max(np.abs(xs)) > 100.0 and max(np.abs(xs)) <= 1500.0
+    env.close()
+
+
+# ------------------------------------------------------------------ config validation
+@pytest.mark.parametrize("config", ["minigames/penalty.yaml"])
+def test_config_validation_names_unknown_keys_and_bad_values(config):
+    with pytest.raises(ValueError, match="ball_distanse_uu"):
+        rocketdrl_ma.parallel_env(config, ball_distanse_uu=100.0)
+    with pytest.raises(ValueError, match="orange_size"):  # a one-car minigame fixes its teams
+        rocketdrl_ma.parallel_env(config, orange_size=2)
+    with pytest.raises(ValueError, match="rewards: unknown term 'goals'"):
+        rocketdrl_ma.parallel_env(config, rewards={"goals": 1.0})
+    with pytest.raises(ValueError, match="difficulty"):
+        rocketdrl_ma.parallel_env(config, difficulty=1.5)
+    with pytest.raises(ValueError, match="timeout_s"):
+        rocketdrl_ma.parallel_env(config, timeout_s=0.0)
+    with pytest.raises(ValueError, match="rounds"):
+        rocketdrl_ma.parallel_env(config, rounds=0)
