@@ -19,6 +19,8 @@ mirrored state (teams swapped) get bit-identical observations.
 Builders: ``SeedSensors`` (the RocketDRL seed's 12 general data sensors), ``RaySensor`` (a fan of
 distance rays with a hit class), ``TeamRelativeObs`` (the full state in the team frame) and
 ``CombinedObs`` (concatenation). ``make_obs_builder("seed_sensors+ray")`` combines by name.
+``SeedBarrierSensors`` / ``SeedAerialSensors`` (``seed_barrier``, ``seed_aerial``) are the seed sensors plus
+the Barrier and Aerial minigames' own.
 """
 from __future__ import annotations
 
@@ -467,6 +469,75 @@ class TeamRelativeObs(ObsBuilder):
         return _finish(np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts]), space)
 
 
+# ================================================================= the seed's minigame sensors
+class SeedBarrierSensors(ObsBuilder):
+    """``SeedSensors`` plus the seed's Barrier sensor (21 numbers; 18 without the goal sensor).
+
+    ====== ================== ==================================================================== =======
+    index  sensor             value                                                                range
+    ====== ================== ==================================================================== =======
+    0-17   general            ``SeedSensors``                                                      above
+    18-20  barrier -> ball    ball - centre of the first ``state.obstacles`` box, team frame,      [-1, 1]
+                              / ARENA_DIAGONAL; zeros when there is no barrier
+    ====== ================== ==================================================================== =======
+
+    The z part tells a lifted barrier (centre high above the ball) from one standing on the floor.
+    """
+
+    def __init__(self, goal_sensor: bool = True):
+        self.general = SeedSensors(goal_sensor)
+        self.size = self.general.size + 3
+        g = self.general.space(1, 0)
+        self._space = _box(np.concatenate([g.low, [-1.0] * 3]), np.concatenate([g.high, [1.0] * 3]))
+
+    def space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        _check_sizes(blue_size, orange_size)
+        return self._space
+
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        extra = np.zeros(3)
+        if state.obstacles and agent in state.cars:
+            extra = (state.ball.pos - np.asarray(state.obstacles[0].center)) * team_sign(agent) / ARENA_DIAGONAL
+        return _finish(np.concatenate([self.general.build(agent, state), extra]), self._space)
+
+
+class SeedAerialSensors(ObsBuilder):
+    """``SeedSensors`` plus the seed's Aerial sensors (22 numbers; 19 without the goal sensor).
+
+    ====== ================== ==================================================================== =======
+    index  sensor             value                                                                range
+    ====== ================== ==================================================================== =======
+    0-17   general            ``SeedSensors``                                                      above
+    18     ball frozen        the ball still hangs where it was placed (``mode_state["ball_frozen"]``) {0, 1}
+    19     release countdown  seconds until the ball is released / the release delay                [0, 1]
+    20     aerial touch done  this agent made this round's valid aerial touch                       {0, 1}
+    21     touch state        1: touched the ball and waiting for reset (not on the ground since),  {0, 1}
+                              0: ready
+    ====== ================== ==================================================================== =======
+
+    The flags come from ``GameState.mode_state`` (the Aerial minigame fills it); elsewhere they are zeros.
+    """
+
+    def __init__(self, goal_sensor: bool = True):
+        self.general = SeedSensors(goal_sensor)
+        self.size = self.general.size + 4
+        g = self.general.space(1, 0)
+        self._space = _box(np.concatenate([g.low, [0.0] * 4]), np.concatenate([g.high, [1.0] * 4]))
+
+    def space(self, blue_size: int, orange_size: int) -> spaces.Box:
+        _check_sizes(blue_size, orange_size)
+        return self._space
+
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        mode = state.mode_state
+        release_after = float(mode.get("release_after_s", 0.0))
+        extra = [float(mode.get("ball_frozen", False)),
+                 float(mode.get("release_in_s", 0.0)) / release_after if release_after > 0.0 else 0.0,
+                 float(mode.get("aerial_touch_done", {}).get(agent, False)),
+                 float(mode.get("touch_waiting_reset", {}).get(agent, False))]
+        return _finish(np.concatenate([self.general.build(agent, state), extra]), self._space)
+
+
 # ================================================================= composition and the registry
 class CombinedObs(ObsBuilder):
     """The concatenation of several builders' observations, in order (e.g. seed sensors + rays)."""
@@ -490,7 +561,8 @@ class CombinedObs(ObsBuilder):
 
 
 OBS_BUILDERS: dict[str, type[ObsBuilder]] = {
-    "seed_sensors": SeedSensors, "ray": RaySensor, "team_relative": TeamRelativeObs}
+    "seed_sensors": SeedSensors, "ray": RaySensor, "team_relative": TeamRelativeObs,
+    "seed_barrier": SeedBarrierSensors, "seed_aerial": SeedAerialSensors}
 
 
 def _construct(name: str, kwargs: dict) -> ObsBuilder:

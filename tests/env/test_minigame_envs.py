@@ -5,8 +5,11 @@ from pettingzoo.test import api_test, parallel_api_test, parallel_seed_test, sta
 from pettingzoo.utils.conversions import parallel_to_aec
 
 import rocketdrl_ma
+from rocketdrl_ma.env.observations import ARENA_DIAGONAL, RAY_CLASSES
+from rocketdrl_ma.physics import BallState, CarState, yaw_rot_mat
+from rocketdrl_ma.physics import constants as C
 
-CONFIGS = ["minigames/penalty.yaml"]
+CONFIGS = ["minigames/penalty.yaml", "minigames/barrier.yaml"]
 SHORT = {"timeout_s": 3.0}  # short rounds: the tests see many episodes end
 
 
@@ -72,4 +75,26 @@ def test_numeric_infos_keep_their_keys_and_report_success_at_the_end(config):
             assert set(info) == keys[a] and all(isinstance(v, float) for v in info.values())
     assert infos["blue_0"]["rounds_played"] == 1.0
     assert infos["blue_0"]["goals"] + infos["blue_0"]["misses"] == 1.0
+    env.close()
+
+
+def test_barrier_sensors_see_the_barrier():
+    """seed_barrier's barrier -> ball vector, and the rays' barrier class, on a barrier 700 uu in front of the ball."""
+    env = rocketdrl_ma.parallel_env("minigames/barrier.yaml", difficulty=0.0, lift_probability=0.0)
+    obs, _ = env.reset(seed=0)
+    rules = env.unwrapped.rules
+    (barrier,) = rules.game_state().obstacles
+    ball = rules.arena.ball.get_state().pos
+    assert env.observation_space("blue_0").shape == (21 + 40,)
+    assert np.allclose(obs["blue_0"][18:21], (ball - barrier.center) / ARENA_DIAGONAL, atol=1e-6)
+    # the car 1000 uu in front of the barrier's face, facing it, the ball out of the way
+    face_y = barrier.center[1] - barrier.half_extents[1]
+    rules.cars["blue_0"].set_state(CarState(pos=np.array([0.0, face_y - 1000.0, C.CAR_SPAWN_REST_Z]),
+                                            rot_mat=yaw_rot_mat(np.pi / 2), on_ground=True))
+    rules.arena.ball.set_state(BallState(pos=np.array([-3000.0, 0.0, C.BALL_RADIUS])))
+    obs = env.step({"blue_0": np.zeros(5, np.float32)})[0]["blue_0"]
+    rays = obs[21:].reshape(8, 5)
+    barrier_rays = rays[rays[:, 1 + RAY_CLASSES.index("barrier")] == 1.0]
+    assert len(barrier_rays) >= 2
+    assert barrier_rays[:, 0].min() == pytest.approx(1000.0 / np.cos(np.radians(5.0)) / 4000.0, rel=0.02)
     env.close()

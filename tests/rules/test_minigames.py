@@ -116,8 +116,84 @@ def test_difficulty_zero_spawns_on_the_goal_axis_and_one_spreads_along_the_width
     env.close()
 
 
+# ------------------------------------------------------------------ barrier
+FIXED_BARRIER = {"difficulty": 0.0, "lift_probability": 0.0}  # ball 2000 out on the axis, barrier 700 in front
+
+
+def barrier_env(**overrides):
+    env = rocketdrl_ma.parallel_env("minigames/barrier.yaml", **{**FIXED_BARRIER, **overrides})
+    env.reset(seed=0)
+    return env
+
+
+def test_barrier_is_placed_on_the_ball_goal_line_and_exposed_as_an_obstacle():
+    env = barrier_env()
+    state = env.unwrapped.rules.game_state()
+    (barrier,) = state.obstacles
+    assert np.allclose(barrier.center, [0.0, C.ARENA_EXTENT_Y - 2000.0 + 700.0, 150.0])
+    assert np.allclose(barrier.half_extents, [400.0, 50.0, 150.0])
+    env.close()
+
+
+def test_barrier_blocks_a_ground_shot_that_scores_without_it():
+    env = barrier_env()
+    straight_shot(env)
+    _, infos = run(env)
+    summary = infos["blue_0"]["summary"]
+    assert summary["goals"] == 0 and summary["results"][0]["reason"] in ("retreat", "timeout")
+    env.close()
+
+    env = barrier_env()  # the same shot with the barrier moved out of the way
+    rules = env.unwrapped.rules
+    rules.arena.move_static_box(rules.barrier_id, [0.0, -3000.0, 1500.0])
+    straight_shot(env)
+    rewards, infos = run(env)
+    assert infos["blue_0"]["summary"]["goals"] == 1 and rewards[-1] == pytest.approx(10.0 - 0.01)
+    env.close()
+
+
+def rolling_shot(env):
+    """The ball rolling on the floor at 2000 uu/s straight at the goal (a low shot); the car far away."""
+    place(env, car_pos=(-2500.0, 0.0, C.CAR_SPAWN_REST_Z), ball_pos=(0.0, C.ARENA_EXTENT_Y - 2000.0, C.BALL_RADIUS),
+          ball_vel=(0.0, 2000.0, 0.0))
+
+
+@pytest.mark.parametrize("lift_uu, scores", [(0.0, False), (260.0, True)])
+def test_a_lifted_barrier_lets_a_low_shot_pass_under_it(lift_uu, scores):
+    lift = {"lift_probability": 1.0, "lift_min_uu": lift_uu, "lift_max_uu": lift_uu}
+    env = barrier_env(**lift)
+    (barrier,) = env.unwrapped.rules.game_state().obstacles
+    assert barrier.center[2] - barrier.half_extents[2] == pytest.approx(lift_uu)
+    rolling_shot(env)
+    _, infos = run(env, action=IDLE)
+    assert infos["blue_0"]["summary"]["goals"] == int(scores)
+    env.close()
+
+    env = barrier_env(**lift)  # a car's shot pops the ball up (to ~230 uu here): it hits even the lifted barrier
+    straight_shot(env)
+    _, infos = run(env)
+    assert infos["blue_0"]["summary"]["goals"] == 0
+    env.close()
+
+
+def test_a_car_bounces_off_the_barrier():
+    env = barrier_env()
+    (barrier,) = env.unwrapped.rules.game_state().obstacles
+    face_y = barrier.center[1] - barrier.half_extents[1]
+    place(env, car_pos=(300.0, face_y - 800.0, C.CAR_SPAWN_REST_Z), ball_pos=(-2500.0, 0.0, C.BALL_REST_Z),
+          car_vel=(0.0, 1400.0, 0.0))
+    max_y = -np.inf
+    for _ in range(24):  # one second of throttle into the wall
+        env.step({"blue_0": np.array([1.0, 0.0, -1.0, -1.0, -1.0], np.float32)})
+        car = env.unwrapped.rules.cars["blue_0"].get_state()
+        max_y = max(max_y, car.pos[1])
+    assert max_y < face_y  # the car's centre never got to the barrier's face
+    assert car.vel[1] < 300.0  # it was stopped (a free car would be near 1400 uu/s)
+    env.close()
+
+
 # ------------------------------------------------------------------ config validation
-@pytest.mark.parametrize("config", ["minigames/penalty.yaml"])
+@pytest.mark.parametrize("config", ["minigames/penalty.yaml", "minigames/barrier.yaml"])
 def test_config_validation_names_unknown_keys_and_bad_values(config):
     with pytest.raises(ValueError, match="ball_distanse_uu"):
         rocketdrl_ma.parallel_env(config, ball_distanse_uu=100.0)
@@ -131,3 +207,12 @@ def test_config_validation_names_unknown_keys_and_bad_values(config):
         rocketdrl_ma.parallel_env(config, timeout_s=0.0)
     with pytest.raises(ValueError, match="rounds"):
         rocketdrl_ma.parallel_env(config, rounds=0)
+
+
+def test_barrier_parameters_are_checked():
+    with pytest.raises(ValueError, match="lift_min_uu"):
+        rocketdrl_ma.parallel_env("minigames/barrier.yaml", lift_min_uu=400.0, lift_max_uu=300.0)
+    with pytest.raises(ValueError, match="barrier_distance_max_uu"):
+        rocketdrl_ma.parallel_env("minigames/barrier.yaml", barrier_distance_max_uu=1900.0)
+    with pytest.raises(ValueError, match="lift_probability"):
+        rocketdrl_ma.parallel_env("minigames/barrier.yaml", lift_probability=2.0)
