@@ -179,6 +179,11 @@ class RocketDRLParallelEnv(ParallelEnv):
         if self.render_mode == "human":
             self.render()
 
+    @property
+    def game_state(self) -> GameState | None:
+        """The game after the last reset or step (None before the first reset)."""
+        return self._state
+
     def state(self) -> np.ndarray:
         if self._state is None:
             raise ValueError("state: call reset() first")
