@@ -192,8 +192,79 @@ def test_a_car_bounces_off_the_barrier():
     env.close()
 
 
+# ------------------------------------------------------------------ aerial
+def aerial_env(**overrides):
+    env = rocketdrl_ma.parallel_env("minigames/aerial.yaml", **{"difficulty": 0.0, **overrides})
+    env.reset(seed=0)
+    return env
+
+
+def aerial_shot(env):
+    """The car airborne at the frozen ball's height (550 uu, car centre 540), 250 uu behind it, flying at the goal."""
+    rules = env.unwrapped.rules
+    ball = rules.arena.ball.get_state().pos
+    rules.cars["blue_0"].set_state(CarState(pos=np.array([0.0, ball[1] - 250.0, ball[2] - 10.0]),
+                                            vel=np.array([0.0, 1500.0, 0.0]), rot_mat=yaw_rot_mat(np.pi / 2),
+                                            on_ground=False, has_jumped=True))
+    env.unwrapped._state = rules.game_state()
+
+
+def test_aerial_ball_hangs_for_three_seconds_then_a_floor_landing_is_a_miss():
+    env = aerial_env(timeout_s=8.0)
+    rules = env.unwrapped.rules
+    start = rules.arena.ball.get_state().pos
+    assert start[2] == pytest.approx(550.0)
+    steps_to_release = int(3.0 * C.TICK_RATE_HZ / 5)
+    for step in range(steps_to_release):
+        obs, *_ = env.step({"blue_0": IDLE})
+        state = env.unwrapped._state
+        frozen = step < steps_to_release - 1
+        assert state.mode_state["ball_frozen"] is frozen and obs["blue_0"][18] == float(frozen)
+        if frozen:
+            assert np.array_equal(state.ball.pos, start)
+    rewards, infos = run(env, action=IDLE)
+    summary = infos["blue_0"]["summary"]
+    assert summary["results"][0]["reason"] == "ball_on_ground" and rewards[-1] == pytest.approx(-10.01)
+    assert summary["results"][0]["time_s"] == pytest.approx(3.0 + np.sqrt(2 * (550.0 - 96.25) / 650.0), abs=0.05)
+    env.close()
+
+
+def test_aerial_touch_then_goal_earns_five_then_ten():
+    env = aerial_env()
+    aerial_shot(env)
+    obs_seen, rewards = [], []
+    while env.agents:
+        obs, r, _, _, infos = env.step({"blue_0": IDLE})
+        obs_seen.append(obs["blue_0"])
+        rewards.append(r["blue_0"])
+    assert sum(r == pytest.approx(5.0 - 0.01) for r in rewards) == 1 and rewards[-1] == pytest.approx(10.0 - 0.01)
+    assert sum(rewards) == pytest.approx(15.0 - 0.01 * len(rewards))
+    summary = infos["blue_0"]["summary"]
+    assert summary["is_success"] is True and summary["aerial_touches"] == 1
+    assert obs_seen[-1][20] == 1.0 and obs_seen[-1][21] == 1.0  # aerial touch done; touched, waiting for reset
+    env.close()
+
+
+def test_aerial_goal_without_an_aerial_touch_does_not_count():
+    env = aerial_env(aerial_min_height_uu=600.0)  # the same shot, but the car at 540 uu is now too low
+    aerial_shot(env)
+    rewards, infos = run(env, action=IDLE)
+    summary = infos["blue_0"]["summary"]
+    assert summary["results"][0]["reason"] == "goal_not_counted" and summary["aerial_touches"] == 0
+    assert all(r == pytest.approx(-0.01) for r in rewards[:-1])  # no +5
+    assert rewards[-1] == pytest.approx(-10.01) and summary["goals"] == 0
+    env.close()
+
+    env = aerial_env()  # thrown in without any touch
+    rules = env.unwrapped.rules
+    rules.arena.ball.set_state(BallState(pos=np.array([0.0, 4000.0, 500.0]), vel=np.array([0.0, 2000.0, 0.0])))
+    rewards, infos = run(env, action=IDLE)
+    assert infos["blue_0"]["summary"]["results"][0]["reason"] == "goal_not_counted"
+    env.close()
+
+
 # ------------------------------------------------------------------ config validation
-@pytest.mark.parametrize("config", ["minigames/penalty.yaml", "minigames/barrier.yaml"])
+@pytest.mark.parametrize("config", ["minigames/penalty.yaml", "minigames/barrier.yaml", "minigames/aerial.yaml"])
 def test_config_validation_names_unknown_keys_and_bad_values(config):
     with pytest.raises(ValueError, match="ball_distanse_uu"):
         rocketdrl_ma.parallel_env(config, ball_distanse_uu=100.0)

@@ -117,6 +117,8 @@ class ShotMinigame(Rules):
         self.car_boost = _check_number("car_boost", car_boost, 0.0, C.BOOST_MAX)
         self.ended = False
         self.results: list[dict] = []
+        self.stats: dict[str, dict[str, int]] = {}
+        self.round_time_s = 0.0
 
     def set_difficulty(self, difficulty: float) -> None:
         """0 (easiest) .. 1 (the full spawn ranges); applies from the next round."""
