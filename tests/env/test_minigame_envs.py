@@ -9,7 +9,7 @@ from rocketdrl_ma.env.observations import ARENA_DIAGONAL, RAY_CLASSES
 from rocketdrl_ma.physics import BallState, CarState, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 
-CONFIGS = ["minigames/penalty.yaml", "minigames/barrier.yaml", "minigames/aerial.yaml"]
+CONFIGS = ["minigames/penalty.yaml", "minigames/barrier.yaml", "minigames/aerial.yaml", "minigames/penalty_duel.yaml"]
 SHORT = {"timeout_s": 3.0}  # short rounds: the tests see many episodes end
 
 

@@ -263,8 +263,44 @@ def test_aerial_goal_without_an_aerial_touch_does_not_count():
     env.close()
 
 
+# ------------------------------------------------------------------ penalty duel
+def test_duel_goal_pays_the_shooter_what_the_keeper_loses():
+    env = rocketdrl_ma.parallel_env("minigames/penalty_duel.yaml")
+    env.reset(seed=0)
+    assert env.agents == ["blue_0", "orange_0"]
+    keeper = env.unwrapped.rules.game_state().cars["orange_0"]
+    assert keeper.pos[1] > C.ARENA_EXTENT_Y - 300.0 and keeper.rot_mat[1, 0] == pytest.approx(-1.0)  # faces out
+    place(env, car_pos=(-2500.0, 4000.0, C.CAR_SPAWN_REST_Z), ball_pos=(-2500.0, 4500.0, C.BALL_REST_Z),
+          agent="orange_0")  # the keeper parked by the side wall, out of the shot's way
+    straight_shot(env)
+    shooter, keeper = [], []
+    while env.agents:
+        _, r, _, _, infos = env.step({"blue_0": DRIVE_BOOST, "orange_0": IDLE})
+        shooter.append(r["blue_0"])
+        keeper.append(r["orange_0"])
+    assert shooter[-1] == pytest.approx(10.0 - 0.01) and keeper[-1] == pytest.approx(-10.0 + 0.01)
+    assert all(a == -b for a, b in zip(shooter, keeper))
+    assert infos["orange_0"]["summary"]["winner"] == "blue"
+    env.close()
+
+
+def test_duel_keeper_save_wins_the_round_for_the_keeper():
+    env = rocketdrl_ma.parallel_env("minigames/penalty_duel.yaml", timeout_s=3.0)
+    env.reset(seed=0)
+    place(env, car_pos=(0.0, 4870.0, C.CAR_SPAWN_REST_Z), ball_pos=(-3000.0, 0.0, C.BALL_REST_Z), yaw=-np.pi / 2,
+          agent="orange_0")
+    place(env, car_pos=(-2500.0, 0.0, C.CAR_SPAWN_REST_Z), ball_pos=(0.0, 4000.0, C.BALL_RADIUS),
+          ball_vel=(0.0, 2000.0, 0.0))  # an on-target roller straight at the keeper
+    rewards, infos = run(env, action=IDLE, agent="orange_0")
+    summary = infos["orange_0"]["summary"]
+    assert summary["goals"] == 0 and summary["stats"]["orange_0"]["saves"] == 1
+    assert rewards[-1] == pytest.approx(10.0 + 0.01) and summary["winner"] == "orange"
+    env.close()
+
+
 # ------------------------------------------------------------------ config validation
-@pytest.mark.parametrize("config", ["minigames/penalty.yaml", "minigames/barrier.yaml", "minigames/aerial.yaml"])
+@pytest.mark.parametrize("config", ["minigames/penalty.yaml", "minigames/barrier.yaml", "minigames/aerial.yaml",
+                                    "minigames/penalty_duel.yaml"])
 def test_config_validation_names_unknown_keys_and_bad_values(config):
     with pytest.raises(ValueError, match="ball_distanse_uu"):
         rocketdrl_ma.parallel_env(config, ball_distanse_uu=100.0)

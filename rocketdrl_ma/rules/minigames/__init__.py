@@ -2,6 +2,7 @@
 from .aerial import Aerial
 from .barrier import Barrier, BarrierPlacement
 from .penalty import Penalty
+from .penalty_duel import PenaltyDuel
 from .shot import ShotMinigame, ShotSpawn
 
-__all__ = ["Aerial", "Barrier", "BarrierPlacement", "Penalty", "ShotMinigame", "ShotSpawn"]
+__all__ = ["Aerial", "Barrier", "BarrierPlacement", "Penalty", "PenaltyDuel", "ShotMinigame", "ShotSpawn"]
