@@ -1,4 +1,5 @@
-"""``rocketdrl-ma train CONFIG`` and ``rocketdrl-ma eval CHECKPOINT --episodes N`` (standard library at the top)."""
+"""``rocketdrl-ma train CONFIG``, ``eval CHECKPOINT --episodes N`` and ``curves RUN_DIR...`` (standard library
+at the top, so ``--help`` stays fast)."""
 from __future__ import annotations
 
 import argparse
@@ -31,6 +32,17 @@ def _run_eval(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_curves(args: argparse.Namespace) -> int:
+    from rocketdrl_ma.policies.ppo.curves import plot_curves
+
+    runs = {}
+    for item in args.runs:
+        label, sep, path = item.partition("=")
+        runs[label if sep else Path(item).name] = path if sep else item
+    print(plot_curves(runs, args.out, args.title))
+    return 0
+
+
 def add_commands(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("train", help="train a PPO policy (torchrl) from a training YAML, e.g. policies/penalty.yaml")
     p.add_argument("config", help="training YAML: ML-Agents PPO keys plus env, env_overrides, n_envs, seed")
@@ -47,3 +59,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--n-envs", type=int, default=4, help="env copies played side by side")
     e.add_argument("--seed", type=int, default=10_000, help="first env seed (training uses 0..n_envs-1)")
     e.set_defaults(run=_run_eval)
+    c = sub.add_parser("curves", help="plot success rate and return vs agent steps from training runs' logs")
+    c.add_argument("runs", nargs="+", help="run directories (runs/NAME), optionally LABEL=DIR")
+    c.add_argument("--out", required=True, help="PNG to write")
+    c.add_argument("--title", default="")
+    c.set_defaults(run=_run_curves)

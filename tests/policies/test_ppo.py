@@ -14,7 +14,9 @@ import rocketdrl_ma
 from rocketdrl_ma.cli import main
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.policies.ppo import load_model, train, validate_train_config
+from rocketdrl_ma.policies.ppo.envs import EnvPool
 from rocketdrl_ma.policies.ppo.model import PPOModel
+from rocketdrl_ma.policies.ppo.shaping import potential
 from rocketdrl_ma.policies.ppo.trainer import make_loss, ppo_update
 from rocketdrl_ma.policies.registry import ObservingPolicy, load_policy
 
@@ -103,6 +105,24 @@ def test_update_lowers_the_loss_on_a_toy_batch():
     # and the greedy policy learned the toy rule
     greedy = model.act_deterministic(obs.numpy())
     assert np.mean(np.sign(greedy[:, 0]) == np.sign(obs[:, 0].numpy())) > 0.9
+
+
+def test_potential_shaping_follows_the_game_state():
+    pool = EnvPool("minigames/penalty.yaml", n_envs=1, seed=0, shaping={"car_to_ball": 1.0, "ball_to_goal": 2.0},
+                   gamma=0.9)
+    pool.reset()
+    env = pool.envs[0]
+    before = env.game_state
+    step = pool.step(np.array([[1.0, 0.0, -1.0, 1.0, -1.0]]))  # full throttle and boost, towards the ball
+    after = env.game_state
+    phi = [potential("blue_0", s, {"car_to_ball": 1.0, "ball_to_goal": 2.0}) for s in (before, after)]
+    assert phi[0] == pytest.approx(-np.linalg.norm(before.ball.pos - before.cars["blue_0"].pos) / 1000.0
+                                   - 2.0 * np.linalg.norm(before.ball.pos - [0.0, 5560.0, 321.3875]) / 1000.0)
+    assert step.shaping[0] == pytest.approx(0.9 * phi[1] - phi[0], rel=1e-5)
+    assert phi[1] > phi[0]  # the car got closer to the ball
+    pool.close()
+    with pytest.raises(ValueError, match="shaping: unknown term 'closeness'"):
+        validate_train_config({**TINY, "shaping": {"closeness": 1.0}})
 
 
 def test_registry_does_not_import_torch_until_a_checkpoint_loads():

@@ -14,7 +14,11 @@ A config is a flat YAML mapping. Hyperparameters (as in ML-Agents' ``trainer_con
   TensorBoard summaries; ``checkpoint_interval`` and ``keep_checkpoints``: periodic checkpoints.
 
 And the rest: ``env`` (a match or minigame YAML), ``env_overrides`` (its keys to replace), ``n_envs``
-(env copies feeding the trainer), ``seed``, ``device`` (``auto``: GPU if present, else CPU).
+(env copies feeding the trainer), ``seed``, ``device`` (``auto``: GPU if present, else CPU), and
+``shaping`` (weights of the trainer's potential-based shaping terms, ``shaping.py``; empty: none), and
+``init_std``: the Gaussian policy's initial standard deviation (1, as ML-Agents). Box policies start with
+their mean at the idle car's controls (no jump, boost or drift), so early exploration drives rather than
+hops.
 """
 from __future__ import annotations
 
@@ -24,6 +28,8 @@ from typing import Any
 import yaml
 
 from rocketdrl_ma.config import load_config, resolve_config_path
+
+from .shaping import check_shaping
 
 #: every key a training config may hold, with its default (ML-Agents' PPO defaults where it has one)
 TRAIN_DEFAULTS: dict[str, Any] = {
@@ -50,6 +56,8 @@ TRAIN_DEFAULTS: dict[str, Any] = {
     "summary_freq": 50_000,
     "checkpoint_interval": 500_000,
     "keep_checkpoints": 5,
+    "shaping": {},
+    "init_std": 1.0,
 }
 SCHEDULES = ("linear", "constant")
 DEVICES = ("auto", "cpu", "cuda")
@@ -81,13 +89,13 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
         if cfg[key] < 1:
             raise ValueError(f"{key}: must be >= 1, got {cfg[key]}")
     _check_number("seed", cfg["seed"], int)
-    for key in ("learning_rate", "beta", "epsilon", "lambd", "gamma", "strength"):
+    for key in ("learning_rate", "beta", "epsilon", "lambd", "gamma", "strength", "init_std"):
         _check_number(key, cfg[key], float)
         cfg[key] = float(cfg[key])
     for key in UNIT_INTERVAL:
         if not 0.0 <= cfg[key] <= 1.0:
             raise ValueError(f"{key}: must be in [0, 1], got {cfg[key]}")
-    for key in ("learning_rate", "epsilon"):
+    for key in ("learning_rate", "epsilon", "init_std"):
         if cfg[key] <= 0.0:
             raise ValueError(f"{key}: must be > 0, got {cfg[key]}")
     if cfg["beta"] < 0.0:
@@ -100,6 +108,7 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"normalize: expected true or false, got {cfg['normalize']!r}")
     if cfg["batch_size"] > cfg["buffer_size"]:
         raise ValueError(f"batch_size: must be <= buffer_size ({cfg['buffer_size']}), got {cfg['batch_size']}")
+    cfg["shaping"] = check_shaping(cfg["shaping"])
     # The env config is validated now, so a typo there fails before any training starts.
     load_config(cfg["env"], cfg["env_overrides"])
     return cfg

@@ -2,7 +2,8 @@
 
 All agents share one policy (for a match that is self-play against itself). A copy that ends is reset
 at once; ``step`` reports the finished episodes (return, length, success) and, for rows cut off by a
-time limit, their final observation so the trainer can bootstrap from it.
+time limit, their final observation so the trainer can bootstrap from it. With ``shaping`` weights the
+pool also returns the potential-based shaping term of each row (``shaping.py``).
 """
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ import numpy as np
 from gymnasium import spaces
 
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+
+from .shaping import potential
 
 
 @dataclass
@@ -36,7 +39,8 @@ def episode_success(agent: str, info: dict) -> bool:
 @dataclass
 class StepResult:
     obs: np.ndarray            # [rows, obs_dim] observations to act on next (after any reset)
-    reward: np.ndarray         # [rows]
+    reward: np.ndarray         # [rows] the env's reward
+    shaping: np.ndarray        # [rows] gamma * phi(s') - phi(s); zeros without shaping weights
     terminated: np.ndarray     # [rows] bool: the episode reached its end (no bootstrap)
     truncated: np.ndarray      # [rows] bool: cut off by a time limit (bootstrap from final_obs)
     final_obs: np.ndarray      # [rows, obs_dim]: the last observation of rows that ended, else obs
@@ -46,7 +50,8 @@ class StepResult:
 class EnvPool:
     """``n_envs`` PettingZoo envs stepped one after another in this process."""
 
-    def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None):
+    def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None,
+                 shaping: dict[str, float] | None = None, gamma: float = 0.99):
         overrides = {**(overrides or {}), "info_format": "full"}
         self.envs = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_envs)]
         first = self.envs[0]
@@ -57,6 +62,8 @@ class EnvPool:
         self.seed = seed
         self._returns = np.zeros(self.n_rows)
         self._lengths = np.zeros(self.n_rows, dtype=np.int64)
+        self.shaping, self.gamma = dict(shaping or {}), gamma
+        self._phi = np.zeros(self.n_rows)
 
     def _rows(self, i: int) -> slice:
         return slice(i * len(self.agents), (i + 1) * len(self.agents))
@@ -66,6 +73,7 @@ class EnvPool:
         for i, env in enumerate(self.envs):
             o, _ = env.reset(seed=self.seed + i)
             obs[self._rows(i)] = [o[a] for a in self.agents]
+            self._phi[self._rows(i)] = self._potentials(env)
         self._returns[:] = 0.0
         self._lengths[:] = 0
         return obs
@@ -77,6 +85,7 @@ class EnvPool:
         reward = np.zeros(self.n_rows, np.float32)
         terminated = np.zeros(self.n_rows, bool)
         truncated = np.zeros(self.n_rows, bool)
+        shaping = np.zeros(self.n_rows, np.float32)
         episodes: list[Episode] = []
         for i, env in enumerate(self.envs):
             rows = self._rows(i)
@@ -86,6 +95,10 @@ class EnvPool:
             reward[rows] = [r[a] for a in self.agents]
             terminated[rows] = [term[a] for a in self.agents]
             truncated[rows] = [trunc[a] and not term[a] for a in self.agents]
+            if self.shaping:
+                phi = np.asarray(self._potentials(env))
+                shaping[rows] = self.gamma * phi - self._phi[rows]
+                self._phi[rows] = phi
             if not env.agents:  # every agent of a copy ends together
                 final_obs[rows] = obs[rows]
                 for k, agent in enumerate(self.agents):
@@ -94,10 +107,17 @@ class EnvPool:
                                             episode_success(agent, infos[agent])))
                 o, _ = env.reset()
                 obs[rows] = [o[a] for a in self.agents]
+                self._phi[rows] = self._potentials(env)
         done = terminated | truncated
         self._returns = np.where(done, 0.0, self._returns + reward)
         self._lengths = np.where(done, 0, self._lengths + 1)
-        return StepResult(obs, reward, terminated, truncated, final_obs, episodes)
+        return StepResult(obs, reward, shaping, terminated, truncated, final_obs, episodes)
+
+    def _potentials(self, env: RocketDRLParallelEnv) -> list[float]:
+        if not self.shaping:
+            return [0.0] * len(self.agents)
+        state = env.game_state
+        return [potential(agent, state, self.shaping) for agent in self.agents]
 
     def close(self) -> None:
         for env in self.envs:

@@ -68,10 +68,10 @@ def mlp(n_in: int, n_out: int, hidden_units: int, num_layers: int, out_gain: flo
 
 
 class GaussianHead(nn.Module):
-    def __init__(self, body: nn.Module, dim: int):
+    def __init__(self, body: nn.Module, dim: int, init_std: float):
         super().__init__()
         self.body = body
-        self.log_std = nn.Parameter(torch.zeros(dim))
+        self.log_std = nn.Parameter(torch.full((dim,), float(np.log(init_std))))
 
     def forward(self, obs: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         loc = self.body(obs)
@@ -79,13 +79,17 @@ class GaussianHead(nn.Module):
 
 
 class PPOModel(nn.Module):
-    def __init__(self, obs_dim: int, action: dict, hidden_units: int, num_layers: int, normalize: bool):
+    def __init__(self, obs_dim: int, action: dict, hidden_units: int, num_layers: int, normalize: bool,
+                 init_std: float = 1.0, init_action: np.ndarray | None = None):
         super().__init__()
         self.action = action
         self.obs_norm = RunningNorm(obs_dim, normalize)
         if action["kind"] == "box":
-            self.policy: nn.Module = GaussianHead(mlp(obs_dim, action["dim"], hidden_units, num_layers, 0.01),
-                                                  action["dim"])
+            body = mlp(obs_dim, action["dim"], hidden_units, num_layers, 0.01)
+            if init_action is not None:  # start from these controls (the idle car: no jump, no boost)
+                with torch.no_grad():
+                    body[-1].bias.copy_(torch.as_tensor(init_action, dtype=torch.float32))
+            self.policy: nn.Module = GaussianHead(body, action["dim"], init_std)
         else:
             self.policy = mlp(obs_dim, action["n"], hidden_units, num_layers, 0.01)
         self.value = mlp(obs_dim, 1, hidden_units, num_layers, 1.0)

@@ -23,6 +23,7 @@ from torchrl.objectives.value.functional import generalized_advantage_estimate
 from tqdm import tqdm
 
 from rocketdrl_ma.config import load_config
+from rocketdrl_ma.physics import CarControls
 
 from .checkpoint import read_meta, resolve_checkpoint, save_checkpoint, sidecar
 from .envs import EnvPool
@@ -61,10 +62,12 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     torch.manual_seed(cfg["seed"])
     device = pick_device(cfg["device"])
     run_dir = Path(run_dir)
-    pool = EnvPool(cfg["env"], cfg["n_envs"], cfg["seed"], cfg["env_overrides"])
+    pool = EnvPool(cfg["env"], cfg["n_envs"], cfg["seed"], cfg["env_overrides"], cfg["shaping"], cfg["gamma"])
     obs_dim = pool.observation_space.shape[0]
-    model = PPOModel(obs_dim, action_spec(pool.action_space), cfg["hidden_units"], cfg["num_layers"],
-                     cfg["normalize"]).to(device)
+    action = action_spec(pool.action_space)
+    idle = pool.envs[0].action_parser.encode(CarControls()) if action["kind"] == "box" else None
+    model = PPOModel(obs_dim, action, cfg["hidden_units"], cfg["num_layers"], cfg["normalize"],
+                     cfg["init_std"], idle).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg["learning_rate"], eps=1e-5)
     agent_steps = 0
     if resume is not None:
@@ -112,7 +115,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
                 buf_act.append(td["action"].cpu())
                 buf_logp[t] = td["action_log_prob"].cpu()
                 buf_val[t] = model.value(x).squeeze(-1).cpu()
-                buf_rew[t] = torch.as_tensor(step.reward) * cfg["strength"]
+                buf_rew[t] = torch.as_tensor(step.reward * cfg["strength"] + step.shaping)
                 buf_term[t] = torch.as_tensor(step.terminated)
                 cut = (t + 1) % cfg["time_horizon"] == 0
                 buf_done[t] = torch.as_tensor(step.terminated | step.truncated) | cut
