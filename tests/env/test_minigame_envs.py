@@ -98,3 +98,52 @@ def test_barrier_sensors_see_the_barrier():
     assert len(barrier_rays) >= 2
     assert barrier_rays[:, 0].min() == pytest.approx(1000.0 / np.cos(np.radians(5.0)) / 4000.0, rel=0.02)
     env.close()
+
+
+@pytest.mark.parametrize("config", CONFIGS)
+def test_every_minigame_ends_by_its_timeout(config):
+    """Doing nothing never keeps an episode going: each round ends by its timeout at the latest."""
+    env = rocketdrl_ma.parallel_env(config, timeout_s=1.5, rounds=2)
+    env.reset(seed=0)
+    idle = np.zeros(env.action_space("blue_0").shape, np.float32)
+    steps = 0
+    while env.agents:
+        _, _, terminations, truncations, infos = env.step({a: idle for a in env.agents})
+        steps += 1
+    assert all(terminations.values()) and not any(truncations.values())
+    assert steps <= 2 * 1.5 * C.TICK_RATE_HZ / env.unwrapped.tick_skip
+    assert infos["blue_0"]["summary"]["rounds_played"] == 2
+    env.close()
+
+
+def test_play_command_runs_a_minigame():
+    from rocketdrl_ma.cli import play
+    summary = play("minigames/penalty_duel.yaml", "ball_chaser", "goalie", video=None, seed=0, clock_s=None,
+                   quiet=True)
+    assert summary["rounds_played"] == 1 and summary["goals"] + summary["misses"] == 1
+    assert set(summary["stats"]) == {"blue_0", "orange_0"}
+
+
+def test_barrier_is_rendered():
+    env = rocketdrl_ma.parallel_env("minigames/barrier.yaml", render_mode="rgb_array", difficulty=0.0,
+                                    lift_probability=0.0)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3
+    assert np.array_equal(env.render(), frame)  # the same state draws the same picture
+    env.unwrapped.rules.obstacles = ()
+    env.unwrapped._state = env.unwrapped.rules.game_state()
+    assert not np.array_equal(env.render(), frame)  # the barrier was in the picture
+    env.close()
+
+
+def test_minigame_sensors_read_zeros_outside_their_minigame():
+    env = rocketdrl_ma.parallel_env("matches/1v1.yaml", kickoff_countdown_s=0.0, observation="seed_barrier+seed_aerial")
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space("blue_0").shape == (21 + 22,)
+    for _ in range(5):
+        for agent, o in obs.items():
+            assert env.observation_space(agent).contains(o)
+            assert not o[18:21].any() and not o[21 + 18:].any()
+        obs = env.step({a: env.action_space(a).sample() for a in env.agents})[0]
+    env.close()

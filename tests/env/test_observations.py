@@ -299,7 +299,7 @@ def test_seed_euler_angles():
 
 # ---------------------------------------------------------------- registry and combination
 def test_registry_and_combination():
-    assert set(OBS_BUILDERS) == {"seed_sensors", "ray", "team_relative"}
+    assert set(OBS_BUILDERS) == {"seed_sensors", "ray", "team_relative", "seed_barrier", "seed_aerial"}
     assert isinstance(make_obs_builder("ray", n_rays=4), RaySensor)
     combo = make_obs_builder("seed_sensors+ray", ray={"n_rays": 4})
     assert isinstance(combo, CombinedObs) and combo.space(2, 2).shape == (18 + 20,)

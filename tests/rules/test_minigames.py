@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import rocketdrl_ma
-from rocketdrl_ma.physics import BallState, CarState, yaw_rot_mat
+from rocketdrl_ma.physics import Arena, ArenaBatch, BallState, CarState, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 
 # seed action layout: throttle, steer, jump, boost, drift (buttons pressed above 0)
@@ -114,6 +114,46 @@ def test_difficulty_zero_spawns_on_the_goal_axis_and_one_spreads_along_the_width
         env.unwrapped.rules.set_difficulty(0.0)
     assert max(np.abs(xs)) > 100.0 and max(np.abs(xs)) <= 1500.0
     env.close()
+
+
+# ------------------------------------------------------------------ static boxes in the physics
+def roll_ball_at(arena):
+    """Roll the ball along the floor from y = 1000 towards +y at 1500 uu/s for one second."""
+    arena.ball.set_state(BallState(pos=np.array([0.0, 1000.0, C.BALL_RADIUS]), vel=np.array([0.0, 1500.0, 0.0])))
+    arena.step(120)
+    return arena.ball.get_state()
+
+
+def test_static_box_bounces_the_ball_moves_and_goes_away():
+    arena = Arena(seed=0)
+    box = arena.add_static_box([0.0, 2000.0, 150.0], [400.0, 50.0, 150.0])
+    ball = roll_ball_at(arena)
+    assert ball.pos[1] < 2000.0 - 50.0 - C.BALL_RADIUS + 1.0 and ball.vel[1] < -300.0  # bounced back
+    arena.move_static_box(box, [0.0, 2000.0, 600.0])  # lifted: the rolling ball passes under
+    assert roll_ball_at(arena).pos[1] > 2100.0
+    arena.move_static_box(box, [0.0, 2000.0, 150.0])
+    arena.remove_static_box(box)
+    assert roll_ball_at(arena).pos[1] > 2100.0
+    with pytest.raises(ValueError, match="box_id"):
+        arena.remove_static_box(box)
+    with pytest.raises(ValueError, match="half_extents_uu"):
+        arena.add_static_box([0.0, 0.0, 100.0], [100.0, 0.0, 100.0])
+    with pytest.raises(ValueError, match="center"):
+        arena.add_static_box([0.0, 9000.0, 100.0], [100.0, 100.0, 100.0])
+    with pytest.raises(ValueError, match="center"):
+        arena.add_static_box([0.0, np.nan, 100.0], [100.0, 100.0, 100.0])
+    arena.close()
+
+
+def test_static_box_stays_in_its_own_arena_of_a_batch():
+    batch = ArenaBatch(2, seed=0)
+    batch.arenas[1].add_static_box([0.0, 2000.0, 150.0], [400.0, 50.0, 150.0])
+    for arena in batch.arenas:
+        arena.ball.set_state(BallState(pos=np.array([0.0, 1000.0, C.BALL_RADIUS]), vel=np.array([0.0, 1500.0, 0.0])))
+    batch.step(120)
+    assert batch.arenas[0].ball.get_state().pos[1] > 2100.0  # no box in arena 0
+    assert batch.arenas[1].ball.get_state().vel[1] < -300.0
+    batch.close()
 
 
 # ------------------------------------------------------------------ barrier
@@ -242,6 +282,28 @@ def test_aerial_touch_then_goal_earns_five_then_ten():
     summary = infos["blue_0"]["summary"]
     assert summary["is_success"] is True and summary["aerial_touches"] == 1
     assert obs_seen[-1][20] == 1.0 and obs_seen[-1][21] == 1.0  # aerial touch done; touched, waiting for reset
+    env.close()
+
+
+def test_a_scripted_double_jump_scores_the_aerial_with_the_seed_actions():
+    """Drive at the hanging ball at 600 uu/s, jump 650 uu before it (held 0.21 s), double-jump: the car meets
+    the ball near its apex (~440 uu), which is an aerial touch, and knocks it in."""
+    env = aerial_env()
+    rules = env.unwrapped.rules
+    jump_step = None
+    for step in range(400):
+        if not env.agents:
+            break
+        car, ball = rules.cars["blue_0"].get_state(), rules.arena.ball.get_state()
+        action = np.array([1.0 if car.vel @ car.rot_mat[:, 0] < 600.0 else 0.0, 0.0, -1.0, -1.0, -1.0], np.float32)
+        if jump_step is None and np.linalg.norm((ball.pos - car.pos)[:2]) < 650.0:
+            jump_step = step
+        if jump_step is not None:
+            action[2] = 1.0 if step - jump_step < 5 or step - jump_step == 6 else -1.0
+        _, rewards, _, _, infos = env.step({"blue_0": action})
+    summary = infos["blue_0"]["summary"]
+    assert summary["is_success"] is True and summary["aerial_touches"] == 1
+    assert any(e["kind"] == "goal" for e in infos["blue_0"]["events"]) and rewards["blue_0"] == pytest.approx(9.99)
     env.close()
 
 

@@ -6,7 +6,7 @@ from rocketdrl_ma.physics import constants as C
 
 from ..mutators import StateMutator
 from ..state import GameState
-from .shot import ShotMinigame, ShotSpawn, _check_number, check_range
+from .shot import ShotMinigame, ShotSpawn, check_number, check_range
 
 #: the ball is on the floor when its centre is this close to its radius (uu)
 BALL_FLOOR_MARGIN_UU = 5.0
@@ -40,13 +40,13 @@ class Aerial(ShotMinigame):
         super().__init__(timeout_s=timeout_s, **kwargs)
         self.ball_distance_uu = check_range("ball_distance_min_uu", ball_distance_min_uu, "ball_distance_max_uu",
                                             ball_distance_max_uu, 500.0, C.ARENA_EXTENT_Y - 500.0)
-        self.ball_x_range_uu = _check_number("ball_x_range_uu", ball_x_range_uu, 0.0, 2500.0)
+        self.ball_x_range_uu = check_number("ball_x_range_uu", ball_x_range_uu, 0.0, 2500.0)
         self.ball_height_uu = check_range("ball_height_min_uu", ball_height_min_uu, "ball_height_max_uu",
                                           ball_height_max_uu, 300.0, C.ARENA_HEIGHT - 200.0)
-        self.car_behind_uu = _check_number("car_behind_uu", car_behind_uu, 300.0, 4000.0)
-        self.car_x_range_uu = _check_number("car_x_range_uu", car_x_range_uu, 0.0, 2500.0)
-        self.release_after_s = _check_number("release_after_s", release_after_s, 0.0)
-        self.aerial_min_height_uu = _check_number("aerial_min_height_uu", aerial_min_height_uu, 0.0, C.ARENA_HEIGHT)
+        self.car_behind_uu = check_number("car_behind_uu", car_behind_uu, 300.0, 4000.0)
+        self.car_x_range_uu = check_number("car_x_range_uu", car_x_range_uu, 0.0, 2500.0)
+        self.release_after_s = check_number("release_after_s", release_after_s, 0.0)
+        self.aerial_min_height_uu = check_number("aerial_min_height_uu", aerial_min_height_uu, 0.0, C.ARENA_HEIGHT)
         self.aerial_done: dict[str, bool] = {}
         self.waiting_reset: dict[str, bool] = {}
         self.aerial_touches_this_decision: list[str] = []

@@ -8,7 +8,7 @@ from rocketdrl_ma.physics import constants as C
 
 from ..mutators import StateMutator
 from ..state import Obstacle
-from .shot import ShotMinigame, ShotSpawn, _check_number, check_range
+from .shot import ShotMinigame, ShotSpawn, check_number, check_range
 
 #: where the barrier waits before the first spawn (any spot inside the arena, away from everything)
 _PARKED_CENTER = np.array([0.0, -3000.0, 1500.0])
@@ -65,30 +65,30 @@ nearest ball and barrier, the highest lift).
         super().__init__(timeout_s=timeout_s, **kwargs)
         self.ball_distance_uu = check_range("ball_distance_min_uu", ball_distance_min_uu, "ball_distance_max_uu",
                                             ball_distance_max_uu, 1500.0, C.ARENA_EXTENT_Y - 500.0)
-        self.ball_x_range_uu = _check_number("ball_x_range_uu", ball_x_range_uu, 0.0, 2000.0)
-        self.car_behind_uu = _check_number("car_behind_uu", car_behind_uu, 300.0, 3000.0)
-        self.car_x_range_uu = _check_number("car_x_range_uu", car_x_range_uu, 0.0, 2000.0)
-        self.half_extents = np.array([_check_number("barrier_width_uu", barrier_width_uu, 50.0, 3000.0),
-                                      _check_number("barrier_thickness_uu", barrier_thickness_uu, 20.0, 500.0),
-                                      _check_number("barrier_height_uu", barrier_height_uu, 50.0, 1000.0)]) / 2.0
+        self.ball_x_range_uu = check_number("ball_x_range_uu", ball_x_range_uu, 0.0, 2000.0)
+        self.car_behind_uu = check_number("car_behind_uu", car_behind_uu, 300.0, 3000.0)
+        self.car_x_range_uu = check_number("car_x_range_uu", car_x_range_uu, 0.0, 2000.0)
+        self.half_extents = np.array([check_number("barrier_width_uu", barrier_width_uu, 50.0, 3000.0),
+                                      check_number("barrier_thickness_uu", barrier_thickness_uu, 20.0, 500.0),
+                                      check_number("barrier_height_uu", barrier_height_uu, 50.0, 1000.0)]) / 2.0
         self.barrier_distance_uu = check_range("barrier_distance_min_uu", barrier_distance_min_uu,
                                                "barrier_distance_max_uu", barrier_distance_max_uu, 300.0, 3000.0)
         if self.barrier_distance_uu[1] > self.ball_distance_uu[0] - 300.0:
             raise ValueError(f"barrier_distance_max_uu: must leave the barrier 300 uu in front of the goal line "
                              f"(<= ball_distance_min_uu - 300 = {self.ball_distance_uu[0] - 300.0}), "
                              f"got {barrier_distance_max_uu!r}")
-        self.barrier_x_jitter_uu = _check_number("barrier_x_jitter_uu", barrier_x_jitter_uu, 0.0, 1500.0)
-        self.lift_probability = _check_number("lift_probability", lift_probability, 0.0, 1.0)
+        self.barrier_x_jitter_uu = check_number("barrier_x_jitter_uu", barrier_x_jitter_uu, 0.0, 1500.0)
+        self.lift_probability = check_number("lift_probability", lift_probability, 0.0, 1.0)
         self.lift_uu = check_range("lift_min_uu", lift_min_uu, "lift_max_uu", lift_max_uu, 0.0, 1200.0)
         self.barrier_id: int | None = None
+        self._barrier_arena: Arena | None = None  # the arena the box was added to
         self.lifted = False
         self._placement: BarrierPlacement | None = None
 
-    def build(self, seed: int | None = None) -> None:
-        super().build(seed)
-        self.barrier_id = self.arena.add_static_box(_PARKED_CENTER, self.half_extents)
-
     def spawn_mutators(self) -> list[StateMutator]:
+        if self._barrier_arena is not self.arena:  # first spawn in this arena, however it was built
+            self.barrier_id = self.arena.add_static_box(_PARKED_CENTER, self.half_extents)
+            self._barrier_arena = self.arena
         d = self.difficulty
         shot = ShotSpawn(ball_distance_uu=self.scaled(*self.ball_distance_uu), ball_x_uu=d * self.ball_x_range_uu,
                          ball_z_uu=(C.BALL_REST_Z, C.BALL_REST_Z), car_behind_uu=self.car_behind_uu,

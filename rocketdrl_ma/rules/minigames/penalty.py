@@ -4,7 +4,7 @@ from __future__ import annotations
 from rocketdrl_ma.physics import constants as C
 
 from ..mutators import StateMutator
-from .shot import ShotMinigame, ShotSpawn, _check_number
+from .shot import ShotMinigame, ShotSpawn, check_number
 
 
 class Penalty(ShotMinigame):
@@ -19,10 +19,10 @@ class Penalty(ShotMinigame):
     def __init__(self, ball_distance_uu: float = 2000.0, ball_x_range_uu: float = 1500.0,
                  car_behind_uu: float = 1000.0, car_x_range_uu: float = 1500.0, timeout_s: float = 10.0, **kwargs):
         super().__init__(timeout_s=timeout_s, **kwargs)
-        self.ball_distance_uu = _check_number("ball_distance_uu", ball_distance_uu, 500.0, C.ARENA_EXTENT_Y - 500.0)
-        self.ball_x_range_uu = _check_number("ball_x_range_uu", ball_x_range_uu, 0.0, 2500.0)
-        self.car_behind_uu = _check_number("car_behind_uu", car_behind_uu, 300.0, 4000.0)
-        self.car_x_range_uu = _check_number("car_x_range_uu", car_x_range_uu, 0.0, 2500.0)
+        self.ball_distance_uu = check_number("ball_distance_uu", ball_distance_uu, 500.0, C.ARENA_EXTENT_Y - 500.0)
+        self.ball_x_range_uu = check_number("ball_x_range_uu", ball_x_range_uu, 0.0, 2500.0)
+        self.car_behind_uu = check_number("car_behind_uu", car_behind_uu, 300.0, 4000.0)
+        self.car_x_range_uu = check_number("car_x_range_uu", car_x_range_uu, 0.0, 2500.0)
         if self.ball_distance_uu + self.car_behind_uu > 2.0 * C.ARENA_EXTENT_Y - 1000.0:
             raise ValueError(f"car_behind_uu: the car would start behind the far goal "
                              f"(ball_distance_uu + car_behind_uu = {self.ball_distance_uu + self.car_behind_uu})")

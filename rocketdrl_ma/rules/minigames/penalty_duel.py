@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from ..mutators import StateMutator
 from .penalty import Penalty
-from .shot import _check_number
+from .shot import check_number
 
 
 class PenaltyDuel(Penalty):
@@ -21,7 +21,7 @@ class PenaltyDuel(Penalty):
 
     def __init__(self, keeper_x_range_uu: float = 500.0, **kwargs):
         super().__init__(**kwargs)
-        self.keeper_x_range_uu = _check_number("keeper_x_range_uu", keeper_x_range_uu, 0.0, 800.0)
+        self.keeper_x_range_uu = check_number("keeper_x_range_uu", keeper_x_range_uu, 0.0, 800.0)
 
     def spawn_mutators(self) -> list[StateMutator]:
         return [self.shot_spawn(keeper_x_uu=self.keeper_x_range_uu)]

@@ -4,7 +4,7 @@ The shooter (``blue_0``) attacks the orange goal at +y; a goalkeeper, if the min
 ``orange_0``. A round ends on the first of:
 
 * **goal**: the whole ball is past the +y goal line (``Arena.scoring_team() == 0``); a subclass may
-  refuse it (``goal_counts``), which makes it a miss;
+  refuse it (``goal_counts``), which makes it a miss with reason ``goal_not_counted``;
 * **miss**, with a reason:
   ``timeout`` the round lasted ``timeout_s``;
   ``wide`` the ball reaches the +y end wall outside the goal mouth (its centre beside a post or above the
@@ -37,7 +37,7 @@ END_WALL_MARGIN_UU = 20.0
 KEEPER_LINE_Y = C.ARENA_EXTENT_Y - 250.0  # a goalkeeper's spawn: on its goal line, inside the field
 
 
-def _check_number(name: str, value, low: float | None = None, high: float | None = None) -> float:
+def check_number(name: str, value, low: float | None = None, high: float | None = None) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
         raise ValueError(f"{name}: expected a finite number, got {value!r}")
     if (low is not None and value < low) or (high is not None and value > high):
@@ -49,7 +49,7 @@ def _check_number(name: str, value, low: float | None = None, high: float | None
 def check_range(name_min: str, lo, name_max: str, hi, low: float | None = None,
                 high: float | None = None) -> tuple[float, float]:
     """Validate a ``*_min`` / ``*_max`` parameter pair (numbers within [low, high], min <= max)."""
-    lo, hi = _check_number(name_min, lo, low, high), _check_number(name_max, hi, low, high)
+    lo, hi = check_number(name_min, lo, low, high), check_number(name_max, hi, low, high)
     if lo > hi:
         raise ValueError(f"{name_min}: must be <= {name_max} ({hi!r}), got {lo!r}")
     return lo, hi
@@ -109,12 +109,12 @@ class ShotMinigame(Rules):
         if isinstance(rounds, bool) or not isinstance(rounds, int) or rounds < 1:
             raise ValueError(f"rounds: must be an int >= 1, got {rounds!r}")
         self.rounds = rounds
-        self.timeout_s = _check_number("timeout_s", timeout_s, 0.0)
+        self.timeout_s = check_number("timeout_s", timeout_s, 0.0)
         if self.timeout_s <= 0.0:
             raise ValueError(f"timeout_s: must be > 0, got {timeout_s!r}")
         self.set_difficulty(difficulty)
-        self.miss_line_y = _check_number("miss_line_y", miss_line_y, -C.ARENA_EXTENT_Y, C.ARENA_EXTENT_Y)
-        self.car_boost = _check_number("car_boost", car_boost, 0.0, C.BOOST_MAX)
+        self.miss_line_y = check_number("miss_line_y", miss_line_y, -C.ARENA_EXTENT_Y, C.ARENA_EXTENT_Y)
+        self.car_boost = check_number("car_boost", car_boost, 0.0, C.BOOST_MAX)
         self.ended = False
         self.results: list[dict] = []
         self.stats: dict[str, dict[str, int]] = {}
@@ -122,7 +122,7 @@ class ShotMinigame(Rules):
 
     def set_difficulty(self, difficulty: float) -> None:
         """0 (easiest) .. 1 (the full spawn ranges); applies from the next round."""
-        self.difficulty = _check_number("difficulty", difficulty, 0.0, 1.0)
+        self.difficulty = check_number("difficulty", difficulty, 0.0, 1.0)
 
     def scaled(self, lo: float, hi: float) -> tuple[float, float]:
         """A (lo, hi) draw range narrowed towards ``lo`` by the difficulty."""
