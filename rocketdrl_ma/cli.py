@@ -28,7 +28,7 @@ def play(config: str, blue: str, orange: str, video: str | None, seed: int, cloc
     bots = {agent: make_scripted(blue if agent.startswith("blue") else orange) for agent in env.possible_agents}
     env.reset(seed=seed)
     summary: dict = {}
-    clock = env.config.get("clock_s", 300.0)
+    clock = env.config.get("clock_s", env.config.get("timeout_s", 300.0))  # a minigame's clock is its round timeout
     with tqdm(total=round(clock), unit="s", desc="match", disable=quiet) as bar:
         shown = 0.0
         while env.agents:
