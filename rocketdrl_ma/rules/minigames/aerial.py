@@ -102,8 +102,9 @@ class Aerial(ShotMinigame):
         return None
 
     def mode_state(self) -> dict:
-        return {"ball_frozen": self.arena.ball.is_frozen,
-                "release_in_s": max(self.release_after_s - self.round_time_s, 0.0) if self.arena.ball.is_frozen else 0.0,
+        frozen = self.arena.ball.is_frozen
+        return {"ball_frozen": frozen,
+                "release_in_s": max(self.release_after_s - self.round_time_s, 0.0) if frozen else 0.0,
                 "release_after_s": self.release_after_s,
                 "aerial_touch_done": dict(self.aerial_done), "touch_waiting_reset": dict(self.waiting_reset)}
 
