@@ -362,10 +362,14 @@ class _MeshBuilder:
         self.tris.append((a, c, d))
 
 
-def arena_mesh(fillet_segments: int = 8) -> tuple[np.ndarray, np.ndarray]:
+def arena_mesh(fillet_segments: int = 8, with_floor_and_ceiling: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """The whole interior boundary as (vertices (N, 3) float64 uu, triangles (M, 3) int32), wound so that the
     right-hand normals point into the interior: floor, walls, rounded corners, ramps, ceiling, back walls with
-    the goal openings, and the goal boxes (floor, side walls, roof, back of the net)."""
+    the goal openings, and the goal boxes (floor, side walls, roof, back of the net).
+
+    The physics world leaves out the flat floor and ceiling (``with_floor_and_ceiling=False``) and collides
+    with planes there instead: a ball rolling over the internal edges between coplanar triangles gets kicked
+    up at every edge (Bullet's contact normals flip at triangle edges), which planes have none of."""
     if fillet_segments < 1:
         raise ValueError("fillet_segments must be >= 1")
     m = _MeshBuilder()
@@ -388,7 +392,7 @@ def arena_mesh(fillet_segments: int = 8) -> tuple[np.ndarray, np.ndarray]:
         ring.pop()
     ring_arr = np.array(ring)
     n_rings = max(1, math.ceil(float(np.hypot(ring_arr[:, 0], ring_arr[:, 1]).max()) / MESH_MAX_EDGE))
-    for z in (0.0, ARENA_HEIGHT):
+    for z in (0.0, ARENA_HEIGHT) if with_floor_and_ceiling else ():
         centre = m.v(0.0, 0.0, z)
         rings = [[m.v(x * s, y * s, z) for x, y in ring] for s in np.arange(1, n_rings + 1) / n_rings]
         nr = len(ring)
@@ -404,7 +408,7 @@ def arena_mesh(fillet_segments: int = 8) -> tuple[np.ndarray, np.ndarray]:
     for s in (1.0, -1.0):
         ys = [Y_IN + (back - Y_IN) * k / ny_floor for k in range(ny_floor + 1)]
         for a, b in zip(mouth_x[:-1], mouth_x[1:]):
-            for y0, y1 in zip(ys[:-1], ys[1:]):  # goal floor, from the end of the field floor
+            for y0, y1 in zip(ys[:-1], ys[1:]) if with_floor_and_ceiling else ():  # goal floor
                 m.quad(m.v(a, s * y0, 0.0), m.v(b, s * y0, 0.0), m.v(b, s * y1, 0.0), m.v(a, s * y1, 0.0))
             # roof (from the crossbar) and back of the net
             m.quad(m.v(a, s * ARENA_EXTENT_Y, gh), m.v(b, s * ARENA_EXTENT_Y, gh), m.v(b, s * back, gh),

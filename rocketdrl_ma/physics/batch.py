@@ -154,7 +154,7 @@ class ArenaBatch:
     # ------------------------------------------------------------------ construction
     def _build_static_world(self) -> None:
         cid = self.client
-        verts, idx = arena_mesh()
+        verts, idx = arena_mesh(with_floor_and_ceiling=False)  # the planes below are the floor and ceiling
         shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=(verts * M_PER_UU).tolist(),
                                         indices=idx.reshape(-1).tolist(), flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
                                         physicsClientId=cid)

@@ -165,3 +165,18 @@ def test_head_on_hit_sends_the_ball_faster_than_the_car(arena):
     arena.step(60)
     ball_speed = np.linalg.norm(arena.ball.get_state().vel)
     assert ball_speed == pytest.approx(1882.0, rel=0.1)  # RocketSim: 1401 -> 1882
+
+
+@pytest.mark.parametrize("x", [0.0, 300.0, -2500.0])
+def test_a_rolling_ball_stays_on_the_floor_all_the_way_into_the_goal(arena, x):
+    """Regression: coplanar floor triangles in the collision mesh kicked a rolling ball up at their edges."""
+    arena.ball.set_state(BallState(pos=[x, -4000.0, C.BALL_RADIUS], vel=[0.0, 2500.0, 0.0]))
+    max_vz = 0.0
+    for _ in range(int(C.TICK_RATE_HZ * 10)):
+        arena.step(1)
+        ball = arena.ball.get_state()
+        if abs(ball.pos[1]) > C.ARENA_EXTENT_Y - 600.0 and ball.pos[1] > 0.0:
+            break  # the far end: the ramp (or, at x = 0, the goal) begins
+        max_vz = max(max_vz, abs(ball.vel[2]))
+    assert ball.pos[1] > 4000.0
+    assert max_vz < 5.0
