@@ -61,6 +61,7 @@ class Rules(ABC):
         self.obstacles: tuple[Obstacle, ...] = ()
         self.events: list[dict] = []
         self.last_touch: str | None = None
+        self._touching: set[str] = set()  # agents in contact with the ball on the last tick
         self.last_controls: dict[str, CarControls] = {}
         self._agent_by_car_id: dict[int, str] = {}
 
@@ -120,6 +121,7 @@ class Rules(ABC):
         self.arena._batch.clear_events()
         self.events = []
         self.last_touch = None
+        self._touching = set()
         self.last_controls = {agent: NEUTRAL for agent in self.cars}
         self.on_reset(rng)
 
@@ -136,16 +138,19 @@ class Rules(ABC):
             self.on_tick()
 
     def _collect_physics_events(self) -> None:
+        """Turn the batch's raw events into game events. A touch is the start of a contact: a car resting
+        against the ball (a dribble) is in contact every tick, and that is one touch, not 120 a second."""
         batch = self.arena._batch
-        touched = set()
+        touching = set()
         for event in batch.events:
             tick, kind = event[0], event[1]
             if kind == "ball_touch":
                 agent = self._agent_by_car_id[event[2]]
-                if agent not in touched:
-                    touched.add(agent)
+                if agent not in touching:
+                    touching.add(agent)
                     self.last_touch = agent
-                    self.events.append({"kind": "touch", "tick": tick, "agent": agent})
+                    if agent not in self._touching:
+                        self.events.append({"kind": "touch", "tick": tick, "agent": agent})
             elif kind == "demo":
                 self.events.append({"kind": "demo", "tick": tick, "agent": self._agent_by_car_id[event[2]],
                                     "victim": self._agent_by_car_id[event[3]]})
@@ -155,6 +160,7 @@ class Rules(ABC):
             elif kind == "boost_pickup":
                 self.events.append({"kind": "boost_pickup", "tick": tick, "agent": self._agent_by_car_id[event[2]],
                                     "pad": event[3]})
+        self._touching = touching
         batch.clear_events()
 
     def game_state(self) -> GameState:

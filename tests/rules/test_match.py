@@ -120,3 +120,17 @@ def test_switching_off_boost_pads_and_demos():
     m.advance(_idle(m), 4)
     assert car.get_state().boost == pytest.approx(10.0)
     assert not m.arena._batch.demos_enabled
+
+
+def test_a_ball_resting_on_a_car_is_a_touch_per_landing_not_one_per_tick():
+    m = _match()
+    car = m.cars["blue_0"]
+    car.set_state(CarState(pos=[0.0, -2000.0, C.CAR_SPAWN_REST_Z], rot_mat=yaw_rot_mat(np.pi / 2), on_ground=True))
+    m.arena.ball.set_state(BallState(pos=[0.0, -2000.0, 150.0], vel=[0.0, 0.0, -1.0]))  # dropped onto the roof
+    touches = 0
+    for _ in range(15):
+        m.advance({"blue_0": CarControls(), "orange_0": CarControls()}, 8)
+        touches += sum(e["kind"] == "touch" for e in m.events)
+    # it lands, hops once off the hit impulse, lands again and rests there for 100+ ticks of contact
+    assert 1 <= touches <= 2
+    assert m.last_touch == "blue_0" and m.arena.ball.get_state().pos[2] > 140.0
