@@ -1,8 +1,10 @@
 """PPO: config validation, a short real training run that writes a checkpoint the registry loads and plays,
 resuming, and the update lowering the loss on a fixed toy batch."""
 import json
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -108,8 +110,7 @@ def test_update_lowers_the_loss_on_a_toy_batch():
 
 
 def test_potential_shaping_follows_the_game_state():
-    pool = EnvPool("minigames/penalty.yaml", n_envs=1, seed=0, shaping={"car_to_ball": 1.0, "ball_to_goal": 2.0},
-                   gamma=0.9)
+    pool = EnvPool("minigames/penalty.yaml", n_envs=1, seed=0, shaping={"car_to_ball": 1.0, "ball_to_goal": 2.0})
     pool.reset()
     env = pool.envs[0]
     before = env.game_state
@@ -118,11 +119,61 @@ def test_potential_shaping_follows_the_game_state():
     phi = [potential("blue_0", s, {"car_to_ball": 1.0, "ball_to_goal": 2.0}) for s in (before, after)]
     assert phi[0] == pytest.approx(-np.linalg.norm(before.ball.pos - before.cars["blue_0"].pos) / 1000.0
                                    - 2.0 * np.linalg.norm(before.ball.pos - [0.0, 5560.0, 321.3875]) / 1000.0)
-    assert step.shaping[0] == pytest.approx(0.9 * phi[1] - phi[0], rel=1e-5)
+    assert step.shaping[0] == pytest.approx(phi[1] - phi[0], rel=1e-5)
     assert phi[1] > phi[0]  # the car got closer to the ball
     pool.close()
     with pytest.raises(ValueError, match="shaping: unknown term 'closeness'"):
         validate_train_config({**TINY, "shaping": {"closeness": 1.0}})
+
+
+def test_curriculum_sets_the_minigame_difficulty():
+    with pytest.raises(ValueError, match=r"curriculum: unknown key\(s\) \['levels'\]"):
+        validate_train_config({**TINY, "curriculum": {"levels": 3}})
+    with pytest.raises(ValueError, match="curriculum.threshold"):
+        validate_train_config({**TINY, "curriculum": {"threshold": 1.5}})
+    pool = EnvPool("minigames/penalty.yaml", n_envs=2, seed=0)
+    pool.set_difficulty(0.0)  # the easiest spawn: car and ball on the goal's axis
+    pool.reset()
+    for env in pool.envs:
+        state = env.game_state
+        assert state.ball.pos[0] == 0.0 and state.cars["blue_0"].pos[0] == 0.0
+    pool.close()
+    match = EnvPool(TINY["env"], n_envs=1, seed=0, overrides=TINY["env_overrides"])
+    with pytest.raises(ValueError, match="curriculum: game mode 'match' has no difficulty"):
+        match.set_difficulty(0.5)
+    match.close()
+
+
+@pytest.mark.slow
+def test_curriculum_raises_difficulty_and_sigterm_stops_with_a_checkpoint(tmp_path):
+    """Threshold 0: every 100 finished episodes the difficulty goes up a step. SIGTERM to a background run:
+    it finishes the iteration, writes its final checkpoint and exits 0."""
+    cfg = {**TINY, "env": "minigames/penalty.yaml", "env_overrides": {"timeout_s": 0.5}, "n_envs": 4,
+           "max_steps": 10_000_000, "curriculum": {"start": 0.0, "step": 0.5, "threshold": 0.0}}
+    cfg_path = tmp_path / "curriculum.yaml"
+    cfg_path.write_text(json.dumps(cfg))
+    out = tmp_path / "stopped.pt"
+    proc = subprocess.Popen([sys.executable, "-m", "rocketdrl_ma.cli", "train", str(cfg_path), "--out", str(out),
+                             "--run-dir", str(tmp_path / "run"), "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        latest = tmp_path / "run" / "latest.json"  # the periodic checkpoint, every 1024 steps
+        deadline = time.monotonic() + 600.0
+        while proc.poll() is None and time.monotonic() < deadline:
+            try:
+                if json.loads(latest.read_text()).get("difficulty") == 1.0:
+                    break
+            except (FileNotFoundError, json.JSONDecodeError):  # not written yet, or being written
+                pass
+            time.sleep(0.5)
+        proc.send_signal(signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, stderr[-2000:]
+    meta = json.loads((tmp_path / "stopped.json").read_text())
+    assert 1024 < meta["agent_steps"] < 10_000_000
+    assert meta["difficulty"] == 1.0
 
 
 def test_registry_does_not_import_torch_until_a_checkpoint_loads():

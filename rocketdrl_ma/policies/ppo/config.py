@@ -18,7 +18,9 @@ And the rest: ``env`` (a match or minigame YAML), ``env_overrides`` (its keys to
 ``shaping`` (weights of the trainer's potential-based shaping terms, ``shaping.py``; empty: none), and
 ``init_std``: the Gaussian policy's initial standard deviation (1, as ML-Agents). Box policies start with
 their mean at the idle car's controls (no jump, boost or drift), so early exploration drives rather than
-hops.
+hops. ``curriculum`` (as ML-Agents' lessons, over a minigame's ``difficulty``): start at ``start``, and
+each time the last 100 training episodes succeed at least ``threshold`` of the time, raise the
+difficulty by ``step`` up to 1; empty: train at the env config's difficulty throughout.
 """
 from __future__ import annotations
 
@@ -58,7 +60,9 @@ TRAIN_DEFAULTS: dict[str, Any] = {
     "keep_checkpoints": 5,
     "shaping": {},
     "init_std": 1.0,
+    "curriculum": {},
 }
+CURRICULUM_KEYS = {"start": 0.0, "step": 0.1, "threshold": 0.8}
 SCHEDULES = ("linear", "constant")
 DEVICES = ("auto", "cpu", "cuda")
 POSITIVE_INTS = ("n_envs", "batch_size", "buffer_size", "num_epoch", "hidden_units", "num_layers", "time_horizon",
@@ -109,9 +113,29 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
     if cfg["batch_size"] > cfg["buffer_size"]:
         raise ValueError(f"batch_size: must be <= buffer_size ({cfg['buffer_size']}), got {cfg['batch_size']}")
     cfg["shaping"] = check_shaping(cfg["shaping"])
+    cfg["curriculum"] = _check_curriculum(cfg["curriculum"])
     # The env config is validated now, so a typo there fails before any training starts.
     load_config(cfg["env"], cfg["env_overrides"])
     return cfg
+
+
+def _check_curriculum(curriculum: object) -> dict[str, float]:
+    if not isinstance(curriculum, dict):
+        raise ValueError(f"curriculum: expected a mapping with {sorted(CURRICULUM_KEYS)}, got {curriculum!r}")
+    if not curriculum:
+        return {}
+    unknown = sorted(set(curriculum) - set(CURRICULUM_KEYS))
+    if unknown:
+        raise ValueError(f"curriculum: unknown key(s) {unknown}; allowed: {sorted(CURRICULUM_KEYS)}")
+    out = {**CURRICULUM_KEYS, **curriculum}
+    for key, value in out.items():
+        _check_number(f"curriculum.{key}", value, float)
+        if not 0.0 <= value <= 1.0:
+            raise ValueError(f"curriculum.{key}: must be in [0, 1], got {value}")
+        out[key] = float(value)
+    if out["step"] <= 0.0:
+        raise ValueError(f"curriculum.step: must be > 0, got {out['step']}")
+    return out
 
 
 def load_train_config(path: str | Path, overrides: dict[str, Any] | None = None) -> dict[str, Any]:

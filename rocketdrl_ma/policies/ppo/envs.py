@@ -40,7 +40,7 @@ def episode_success(agent: str, info: dict) -> bool:
 class StepResult:
     obs: np.ndarray            # [rows, obs_dim] observations to act on next (after any reset)
     reward: np.ndarray         # [rows] the env's reward
-    shaping: np.ndarray        # [rows] gamma * phi(s') - phi(s); zeros without shaping weights
+    shaping: np.ndarray        # [rows] phi(s') - phi(s); zeros without shaping weights
     terminated: np.ndarray     # [rows] bool: the episode reached its end (no bootstrap)
     truncated: np.ndarray      # [rows] bool: cut off by a time limit (bootstrap from final_obs)
     final_obs: np.ndarray      # [rows, obs_dim]: the last observation of rows that ended, else obs
@@ -51,7 +51,7 @@ class EnvPool:
     """``n_envs`` PettingZoo envs stepped one after another in this process."""
 
     def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None,
-                 shaping: dict[str, float] | None = None, gamma: float = 0.99):
+                 shaping: dict[str, float] | None = None):
         overrides = {**(overrides or {}), "info_format": "full"}
         self.envs = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_envs)]
         first = self.envs[0]
@@ -62,7 +62,7 @@ class EnvPool:
         self.seed = seed
         self._returns = np.zeros(self.n_rows)
         self._lengths = np.zeros(self.n_rows, dtype=np.int64)
-        self.shaping, self.gamma = dict(shaping or {}), gamma
+        self.shaping = dict(shaping or {})
         self._phi = np.zeros(self.n_rows)
 
     def _rows(self, i: int) -> slice:
@@ -97,7 +97,7 @@ class EnvPool:
             truncated[rows] = [trunc[a] and not term[a] for a in self.agents]
             if self.shaping:
                 phi = np.asarray(self._potentials(env))
-                shaping[rows] = self.gamma * phi - self._phi[rows]
+                shaping[rows] = phi - self._phi[rows]
                 self._phi[rows] = phi
             if not env.agents:  # every agent of a copy ends together
                 final_obs[rows] = obs[rows]
@@ -118,6 +118,13 @@ class EnvPool:
             return [0.0] * len(self.agents)
         state = env.game_state
         return [potential(agent, state, self.shaping) for agent in self.agents]
+
+    def set_difficulty(self, difficulty: float) -> None:
+        """A minigame's difficulty knob in [0, 1] (from each copy's next round)."""
+        for env in self.envs:
+            if not hasattr(env.rules, "set_difficulty"):
+                raise ValueError(f"curriculum: game mode {env.config['mode']!r} has no difficulty to set")
+            env.rules.set_difficulty(difficulty)
 
     def close(self) -> None:
         for env in self.envs:

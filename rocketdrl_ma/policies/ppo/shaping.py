@@ -1,9 +1,11 @@
-"""Potential-based reward shaping computed by the trainer from the game state (Ng, Harada, Russell 1999).
+"""Reward shaping computed by the trainer from the game state: differences of a potential.
 
 The env's reward is left alone (evaluation, success rates and logged returns use it); the trainer adds
-``gamma * phi(s') - phi(s)`` per decision, which keeps the optimal policies of the env's reward while
-giving the sparse minigames a gradient to climb. Potentials, each weighted by ``shaping:`` in the
-training YAML, in units of 1000 uu:
+``phi(s') - phi(s)`` per decision. Over an episode that sums to ``phi(end) - phi(start)``: it pays for
+progress (the car closing in on the ball, the ball closing in on the goal) and nothing for merely lasting.
+(Ng, Harada and Russell's ``gamma * phi(s') - phi(s)`` with a negative potential would pay
+``(1 - gamma) * |phi|`` per decision for staying in the episode, which taught our first Penalty runs to
+run the clock down.) Potentials, each weighted by ``shaping:`` in the training YAML, in units of 1000 uu:
 
 - ``car_to_ball``: minus the distance from the agent's car to the ball;
 - ``ball_to_goal``: minus the distance from the ball to the centre of the goal the agent attacks.

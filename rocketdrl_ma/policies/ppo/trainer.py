@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import collections
 import shutil
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -40,6 +42,24 @@ class TrainResult:
     history: list[tuple[int, float, float, int]] = field(default_factory=list)
 
 
+class StopRequest:
+    """Ctrl-C or SIGTERM ends training after the current iteration, with the final checkpoint written."""
+
+    def __init__(self):
+        self.requested = False
+        self._previous = {}
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._previous[sig] = signal.signal(sig, self._request)
+
+    def _request(self, signum, frame) -> None:
+        self.requested = True
+
+    def restore(self) -> None:
+        for sig, handler in self._previous.items():
+            signal.signal(sig, handler)
+
+
 def pick_device(name: str) -> torch.device:
     if name == "auto":
         return torch.device("cuda" if torch.cuda.is_available() else "cpu")
@@ -47,12 +67,13 @@ def pick_device(name: str) -> torch.device:
 
 
 def checkpoint_meta(cfg: dict[str, Any], model: PPOModel, obs_dim: int, agent_steps: int,
-                    metrics: dict[str, float]) -> dict[str, Any]:
+                    metrics: dict[str, float], difficulty: float | None = None) -> dict[str, Any]:
     net = {"obs_dim": obs_dim, "action": model.action, "hidden_units": cfg["hidden_units"],
            "num_layers": cfg["num_layers"], "normalize": cfg["normalize"]}
     env = {"config": cfg["env"], "overrides": cfg["env_overrides"],
            "resolved": load_config(cfg["env"], cfg["env_overrides"])}
-    return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg, "metrics": metrics}
+    return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg, "metrics": metrics,
+            "difficulty": difficulty}
 
 
 def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str | Path | None = None,
@@ -62,7 +83,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     torch.manual_seed(cfg["seed"])
     device = pick_device(cfg["device"])
     run_dir = Path(run_dir)
-    pool = EnvPool(cfg["env"], cfg["n_envs"], cfg["seed"], cfg["env_overrides"], cfg["shaping"], cfg["gamma"])
+    pool = EnvPool(cfg["env"], cfg["n_envs"], cfg["seed"], cfg["env_overrides"], cfg["shaping"])
     obs_dim = pool.observation_space.shape[0]
     action = action_spec(pool.action_space)
     idle = pool.envs[0].action_parser.encode(CarControls()) if action["kind"] == "box" else None
@@ -70,6 +91,8 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
                      cfg["init_std"], idle).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg["learning_rate"], eps=1e-5)
     agent_steps = 0
+    curriculum = cfg["curriculum"]
+    difficulty = curriculum["start"] if curriculum else None
     if resume is not None:
         path = resolve_checkpoint(resume)
         meta = read_meta(path)
@@ -77,6 +100,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
         if sidecar(path, ".optim.pt").is_file():
             optimizer.load_state_dict(torch.load(sidecar(path, ".optim.pt"), map_location=device, weights_only=True))
         agent_steps = int(meta["agent_steps"])
+        difficulty = meta.get("difficulty", difficulty)
 
     loss_module = make_loss(model, cfg)
     actor = model.td_modules()[0]  # the same parameters the loss trains
@@ -90,10 +114,13 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     next_checkpoint = (agent_steps // cfg["checkpoint_interval"] + 1) * cfg["checkpoint_interval"]
     losses: dict[str, float] = {}
 
+    if difficulty is not None:
+        pool.set_difficulty(difficulty)
     obs = pool.reset()
     bar = tqdm(total=cfg["max_steps"], initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps = time.monotonic(), agent_steps
-    while agent_steps < cfg["max_steps"]:
+    stop = StopRequest()
+    while agent_steps < cfg["max_steps"] and not stop.requested:
         # ---- learning rate schedule (ML-Agents' linear: to zero at max_steps)
         frac = 1.0 - agent_steps / cfg["max_steps"] if cfg["learning_rate_schedule"] == "linear" else 1.0
         for group in optimizer.param_groups:
@@ -154,7 +181,15 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
         rate = (agent_steps - start_steps) / max(elapsed, 1e-9)
         success, ret = _episode_stats(recent)
         bar.update(horizon * rows)
-        bar.set_postfix_str(f"{rate:,.0f} steps/s  success {success:.0%}  return {ret:+.2f}  episodes {len(recent)}")
+        level = "" if difficulty is None else f"  difficulty {difficulty:.2f}"
+        bar.set_postfix_str(f"{rate:,.0f} steps/s  success {success:.0%}  return {ret:+.2f}{level}")
+        # ---- curriculum (ML-Agents' lessons): harder once the last episodes at this level succeed often enough
+        if curriculum and difficulty < 1.0 and len(recent) == SUCCESS_WINDOW and success >= curriculum["threshold"]:
+            difficulty = min(1.0, round(difficulty + curriculum["step"], 6))
+            pool.set_difficulty(difficulty)
+            recent.clear()
+            if writer is not None:
+                writer.add_scalar("curriculum/difficulty", difficulty, agent_steps)
         if agent_steps >= next_summary or agent_steps >= cfg["max_steps"]:
             s_success, s_ret = _episode_stats(since_summary)
             history.append((agent_steps, s_success, s_ret, len(since_summary)))
@@ -162,15 +197,17 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             since_summary = []
             next_summary += cfg["summary_freq"]
         if agent_steps >= next_checkpoint:
-            _periodic_checkpoint(run_dir, model, optimizer, cfg, obs_dim, agent_steps, success, ret)
+            _periodic_checkpoint(run_dir, model, optimizer, cfg, obs_dim, agent_steps, success, ret, difficulty)
             next_checkpoint += cfg["checkpoint_interval"]
+    stop.restore()
     bar.close()
     pool.close()
     if writer is not None:
         writer.close()
     success, ret = _episode_stats(recent)
     metrics = {"train_success_rate": success, "train_mean_return": ret, **losses}
-    path = save_checkpoint(out, model, checkpoint_meta(cfg, model, obs_dim, agent_steps, metrics), optimizer)
+    meta = checkpoint_meta(cfg, model, obs_dim, agent_steps, metrics, difficulty)
+    path = save_checkpoint(out, model, meta, optimizer)
     return TrainResult(path, agent_steps, history)
 
 
@@ -234,10 +271,11 @@ def _log(writer, steps: int, success: float, ret: float, episodes: list, losses:
 
 
 def _periodic_checkpoint(run_dir: Path, model: PPOModel, optimizer, cfg: dict, obs_dim: int, steps: int,
-                         success: float, ret: float) -> None:
+                         success: float, ret: float, difficulty: float | None) -> None:
     folder = run_dir / "checkpoints"
     metrics = {"train_success_rate": success, "train_mean_return": ret}
-    save_checkpoint(folder / f"step_{steps}.pt", model, checkpoint_meta(cfg, model, obs_dim, steps, metrics), optimizer)
+    meta = checkpoint_meta(cfg, model, obs_dim, steps, metrics, difficulty)
+    save_checkpoint(folder / f"step_{steps}.pt", model, meta, optimizer)
     kept = sorted(folder.glob("step_*[0-9].pt"), key=lambda p: int(p.stem.split("_")[1]))
     for old in kept[:-cfg["keep_checkpoints"]]:
         for f in (old, sidecar(old, ".json"), sidecar(old, ".optim.pt")):
