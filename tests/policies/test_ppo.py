@@ -60,6 +60,8 @@ def test_short_training_run_writes_a_checkpoint_that_loads_acts_and_resumes(tmp_
     state = torch.load(out, weights_only=True)  # a plain state dict, no pickled code
     assert state["obs_norm.count"] >= 2048 and "policy.log_std" in state
     assert list((tmp_path / "run").glob("events.out.tfevents.*"))  # TensorBoard log
+    assert main(["curves", f"tiny={tmp_path / 'run'}", "--out", str(tmp_path / "curve.png")]) == 0
+    assert (tmp_path / "curve.png").read_bytes()[:4] == b"\x89PNG"
     assert [p.name for p in (tmp_path / "run" / "checkpoints").glob("step_*[0-9].pt")] == ["step_2048.pt"]
 
     policy = load_policy(f"checkpoint:{out}")

@@ -193,7 +193,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
         if agent_steps >= next_summary or agent_steps >= cfg["max_steps"]:
             s_success, s_ret = _episode_stats(since_summary)
             history.append((agent_steps, s_success, s_ret, len(since_summary)))
-            _log(writer, agent_steps, s_success, s_ret, since_summary, losses, rate, optimizer)
+            _log(writer, agent_steps, s_success, s_ret, since_summary, losses, rate, optimizer, difficulty)
             since_summary = []
             next_summary += cfg["summary_freq"]
         if agent_steps >= next_checkpoint:
@@ -256,9 +256,11 @@ def _summary_writer(run_dir: Path):
 
 
 def _log(writer, steps: int, success: float, ret: float, episodes: list, losses: dict, rate: float,
-         optimizer: torch.optim.Optimizer) -> None:
+         optimizer: torch.optim.Optimizer, difficulty: float | None) -> None:
     if writer is None:
         return
+    if difficulty is not None:
+        writer.add_scalar("curriculum/difficulty", difficulty, steps)
     if episodes:
         writer.add_scalar("episode/success_rate", success, steps)
         writer.add_scalar("episode/return", ret, steps)
