@@ -1,0 +1,20 @@
+"""The Zenoh face: a match server that remote bots join, the Bot SDK, spectating.
+
+``rocketdrl_ma.server.Bot`` (subclass it, implement ``act``, call ``run``), ``PolicyBot``,
+``LobbyClient`` and ``MatchServer`` are imported on first use, so ``rocketdrl_ma.server.commands``
+(the CLI) loads nothing heavy.
+"""
+from __future__ import annotations
+
+import importlib
+
+_EXPORTS = {"Bot": "bot", "PolicyBot": "bot", "LobbyClient": "bot", "JoinInfo": "bot", "BotReport": "bot",
+            "ServerError": "bot", "ServerGone": "bot", "MatchServer": "lobby", "ServerSettings": "settings",
+            "MatchOptions": "settings", "ZenohSettings": "settings", "PROTOCOL_VERSION": "protocol"}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

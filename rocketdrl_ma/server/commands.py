@@ -1,0 +1,192 @@
+"""``rocketdrl-ma serve | bot | watch | lobby | router`` (standard library at the top: ``--help`` stays fast)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+DEFAULT_CONNECT = "tcp/127.0.0.1:7447"
+
+
+def _clean_errors(run):
+    """Bad input and server refusals end the command with one line, not a traceback."""
+    def wrapped(args: argparse.Namespace) -> int:
+        from .bot import ServerError, ServerGone
+        try:
+            return run(args)
+        except (ValueError, ServerError, ServerGone, TimeoutError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+    return wrapped
+
+
+def _client_settings(args: argparse.Namespace):
+    from .settings import ZenohSettings, load_zenoh_settings
+    if args.config:
+        return load_zenoh_settings(args.config)
+    return ZenohSettings(mode="client", connect=tuple(args.connect or [DEFAULT_CONNECT]))
+
+
+def _add_client_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--server", default="local", help="the server's name (rocketdrl/<server>/...)")
+    p.add_argument("--config", default=None, help="a YAML with a zenoh: section (e.g. server/client.yaml)")
+    p.add_argument("--connect", action="append", default=None,
+                   help=f"Zenoh endpoint of the server or router (client mode; default {DEFAULT_CONNECT})")
+
+
+def _run_serve(args: argparse.Namespace) -> int:
+    import logging
+    import signal
+    import threading
+
+    from .lobby import MatchServer
+    from .settings import ServerSettings
+
+    logging.basicConfig(level=getattr(logging, args.log_level.upper()), format="%(asctime)s %(name)s %(message)s")
+    settings = ServerSettings.load(args.config)
+    if args.name:
+        settings = ServerSettings.from_dict({**_settings_dict(settings), "name": args.name})
+    if args.listen or args.connect:
+        settings = ServerSettings.from_dict({**_settings_dict(settings),
+                                             "zenoh": settings.zenoh.with_overrides(args.listen, args.connect)})
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    with MatchServer(settings, results_path=args.results) as server:
+        endpoints = ", ".join(settings.zenoh.listen_endpoints()) or "(none)"
+        print(f"serving {settings.name!r}: {settings.zenoh.mode} listening on {endpoints}, "
+              f"connected to {list(settings.zenoh.connect)}; results in {server.store.path}", flush=True)
+        stop.wait()
+    return 0
+
+
+def _settings_dict(settings) -> dict:
+    from dataclasses import fields
+    return {f.name: getattr(settings, f.name) for f in fields(settings)}
+
+
+def _run_bot(args: argparse.Namespace) -> int:
+    from .bot import PolicyBot
+
+    bot = PolicyBot(args.policy, name=args.name)
+
+    def joined(join) -> None:
+        print(f"joined match {join.match} as {join.slot} (status {join.status}); rejoin with --token {join.token}",
+              flush=True)
+
+    report = bot.run(args.match, args.slot, server=args.server, zenoh=_client_settings(args), token=args.token,
+                     on_joined=joined)
+    score = (report.summary or {}).get("score", {})
+    print(f"match {report.match} {report.reason}: blue {score.get('blue')} - {score.get('orange')} orange; "
+          f"{report.decisions} actions sent by {report.slot}" +
+          (f"; {len(report.errors)} refused (last: {report.errors[-1]})" if report.errors else ""), flush=True)
+    return 0
+
+
+def _run_watch(args: argparse.Namespace) -> int:
+    from .watch import watch
+
+    final = watch(args.match, server=args.server, zenoh=_client_settings(args), video=args.video,
+                  replay=args.replay, live=not args.no_live, timeout_s=args.timeout)
+    summary = final.get("summary") or {}
+    print(f"match {args.match} {final['status']}: score {json.dumps(summary.get('score'))}; "
+          f"result {final.get('result_key')}" + (f"; video {args.video}" if args.video else ""), flush=True)
+    return 0
+
+
+def _parse_set(items: list[str] | None) -> dict:
+    import yaml
+    overrides = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise ValueError(f"--set: expected KEY=VALUE, got {item!r}")
+        overrides[key] = yaml.safe_load(value)
+    return overrides
+
+
+def _run_lobby(args: argparse.Namespace) -> int:
+    from .bot import LobbyClient
+
+    if args.action != "list" and not args.target:
+        raise ValueError(f"lobby {args.action}: needs a {'config path' if args.action == 'create' else 'match id'}")
+    session = _client_settings(args).open()
+    try:
+        client = LobbyClient(session, args.server)
+        admin = {"admin_token": args.admin_token} if args.admin_token else {}
+        if args.action == "create":
+            options = {k: v for k, v in (("mode", args.mode), ("deadline_ms", args.deadline_ms),
+                                         ("replacement", args.replacement), ("ready_timeout_s", args.ready_timeout),
+                                         ("fill", args.fill), ("seed", args.seed)) if v is not None}
+            reply = client.create(args.target, args.id, overrides=_parse_set(args.set), **options, **admin)
+            print(f"created match {reply['id']} ({reply['mode']}, slots {list(reply['slot_status'])})")
+        elif args.action == "list":
+            for m in client.list():
+                print(f"{m['id']:12s} {m['status']:9s} {m['mode']:9s} {m['config']}  joined {m['joined']}/"
+                      f"{m['slots']}  decision {m['decision']}  score {m['score']}")
+        elif args.action == "inspect":
+            print(json.dumps(client.inspect(args.target), indent=2, default=str))
+        else:
+            client.stop(args.target, **admin)
+            print(f"stopping match {args.target}")
+    finally:
+        session.close()
+    return 0
+
+
+def _run_router(args: argparse.Namespace) -> int:
+    from .router import run_router
+    from .settings import load_zenoh_settings
+
+    settings = load_zenoh_settings(args.config)
+    run_router(settings, ready=lambda s: print(f"router listening on {list(settings.listen_endpoints())}",
+                                               flush=True))
+    return 0
+
+
+def add_commands(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("serve", help="run a Zenoh match server (lobby, matches, results)")
+    p.add_argument("config", help="server YAML, e.g. server/local.yaml")
+    p.add_argument("--listen", action="append", default=None, help="replace the listen endpoints")
+    p.add_argument("--connect", action="append", default=None, help="replace the connect endpoints")
+    p.add_argument("--name", default=None, help="replace the server name")
+    p.add_argument("--results", default=None, help="replace the results store path")
+    p.add_argument("--log-level", default="info")
+    p.set_defaults(run=_clean_errors(_run_serve))
+
+    b = sub.add_parser("bot", help="play a match on a server with a policy (scripted:NAME, checkpoint:PATH)")
+    b.add_argument("--policy", required=True, help="a load_policy spec, e.g. scripted:ball_chaser")
+    b.add_argument("--match", required=True)
+    b.add_argument("--slot", default=None, help="e.g. blue_0 (default: any open slot)")
+    b.add_argument("--token", default=None, help="rejoin the slot this token holds")
+    b.add_argument("--name", default=None, help="the bot's name (default: the policy spec)")
+    _add_client_options(b)
+    b.set_defaults(run=_clean_errors(_run_bot))
+
+    w = sub.add_parser("watch", help="live scoreboard of a match; optionally save a replay and a video")
+    w.add_argument("match")
+    w.add_argument("--video", default=None, help="write an mp4 or gif of the match (from the published states)")
+    w.add_argument("--replay", default=None, help="write the published states as a replay (.npz)")
+    w.add_argument("--no-live", action="store_true", help="no live table, only the final line")
+    w.add_argument("--timeout", type=float, default=None, help="give up after this many seconds")
+    _add_client_options(w)
+    w.set_defaults(run=_clean_errors(_run_watch))
+
+    lo = sub.add_parser("lobby", help="create, list, inspect or stop matches on a server")
+    lo.add_argument("action", choices=["create", "list", "inspect", "stop"])
+    lo.add_argument("target", nargs="?", default=None, help="create: a config path; inspect/stop: a match id")
+    lo.add_argument("--id", default=None, help="create: the match id (default: random)")
+    lo.add_argument("--mode", choices=["lockstep", "realtime"], default=None)
+    lo.add_argument("--deadline-ms", type=float, default=None)
+    lo.add_argument("--replacement", choices=["repeat", "neutral"], default=None)
+    lo.add_argument("--ready-timeout", type=float, default=None)
+    lo.add_argument("--fill", default=None, help="policy spec for empty slots, or idle")
+    lo.add_argument("--seed", type=int, default=None)
+    lo.add_argument("--set", action="append", default=None, help="config override KEY=VALUE (YAML value)")
+    lo.add_argument("--admin-token", default=None)
+    _add_client_options(lo)
+    lo.set_defaults(run=_clean_errors(_run_lobby))
+
+    r = sub.add_parser("router", help="run a Zenoh router from Python (for play across machines)")
+    r.add_argument("config", help="a YAML with a zenoh: section in router mode, e.g. server/router.yaml")
+    r.set_defaults(run=_clean_errors(_run_router))

@@ -1,0 +1,484 @@
+"""One match on the server: its slots, joining and leaving, the lockstep or real-time loop, the result.
+
+Each match runs in its own thread. Bots' actions arrive on Zenoh callback threads (``on_action``):
+they are decoded, checked (size, protocol version, the slot's token, the decision number, the
+action's shape and range) and parsed into ``CarControls`` there, so nothing a bot sends can reach the
+env unchecked. The match thread only waits, up to the deadline, for the actions of connected bots.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+import traceback
+import uuid
+from collections import Counter
+from typing import Any, Callable
+
+import numpy as np
+
+import rocketdrl_ma
+from rocketdrl_ma.config import load_config
+from rocketdrl_ma.env.actions import make_action_parser
+from rocketdrl_ma.env.observations import make_obs_builder
+from rocketdrl_ma.physics import CarControls
+from rocketdrl_ma.results import MatchResult
+
+from .protocol import (MAX_ACTION_BYTES, Keys, ProtocolError, VersionError, encode_space, encode_state, pack,
+                       pack_value, pack_with_raw, unpack)
+from .settings import MatchOptions
+from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations, same_token
+
+log = logging.getLogger(__name__)
+REALTIME_TICK_HZ = 120.0
+STATUSES = ("waiting", "running", "finished", "stopped", "failed")
+_CONTROL_FIELDS = ("throttle", "steer", "pitch", "yaw", "roll", "jump", "boost", "handbrake")
+
+
+def _spec(value: Any, field: str) -> dict:
+    """``"ray"`` or ``{"name": "ray", "n_rays": 12}`` -> a spec mapping; anything else is a ValueError."""
+    if isinstance(value, str):
+        return {"name": value}
+    if isinstance(value, dict) and isinstance(value.get("name"), str):
+        return dict(value)
+    raise ValueError(f"{field}: expected a name or a mapping with 'name' and its options, got {value!r}")
+
+
+def _percentile_ms(values: list[float], q: float) -> float | None:
+    return round(float(np.percentile(values, q)) * 1e3, 3) if values else None
+
+
+class MatchRunner:
+    """A match from creation to its result. ``session`` is the server's Zenoh session."""
+
+    def __init__(self, match_id: str, options: MatchOptions, session, keys: Keys,
+                 record: Callable[[MatchResult], None]):
+        self.id, self.options, self.session, self.keys, self._record = match_id, options, session, keys, record
+        overrides = dict(options.overrides)
+        env_config = load_config(options.config, overrides)  # ValueError naming the key if bad
+        self.config = env_config
+        self.decision_ticks: int = env_config["tick_skip"]
+        if options.mode == "realtime":
+            # One env step per physics tick, so the latest actions apply at every 120 Hz tick.
+            overrides["tick_skip"] = 1
+            if env_config["max_cycles"] is not None:
+                overrides["max_cycles"] = env_config["max_cycles"] * self.decision_ticks
+        self.env = rocketdrl_ma.parallel_env(options.config, **overrides)
+        self.slots: dict[str, Slot] = {agent: Slot(agent) for agent in self.env.possible_agents}
+        self._match_parser = self.env.action_parser
+        self._obs = SlotObservations(self.env.obs_builder, self.slots)
+        self.env.obs_builder = self._obs
+        self.env.action_parser = ControlsPassThrough(self._match_parser)
+        self._fill: dict[str, Any] = {}
+        self.status = "waiting"
+        self.created_at = time.time()
+        self.started_at: float | None = None
+        self.seed = options.seed if options.seed is not None else int.from_bytes(uuid.uuid4().bytes[:4], "little")
+        self.result_key: str | None = None
+        self.error: str | None = None
+        self.decision = 0  # the decision whose actions are being collected
+        self.scoreboard: dict = {}
+        self.rejected: Counter = Counter()
+        self._event_counts: Counter = Counter()
+        self._goals: list[dict] = []
+        self._decision_s: list[float] = []
+        self._wait_s: list[float] = []
+        self._cond = threading.Condition()
+        self._stop = threading.Event()
+        self._publishers: dict[str, Any] = {}
+        self._act_sub = session.declare_subscriber(keys.all_actions(match_id), self.on_action)
+        self._thread = threading.Thread(target=self._run, name=f"match-{match_id}", daemon=True)
+
+    def start(self) -> None:
+        self._thread.start()
+
+    # ------------------------------------------------------------------------------------------ lobby side
+    def join(self, request: dict) -> dict:
+        """Seat a bot (any open slot or the named one) or, given its token, reconnect it to its slot."""
+        name = request.get("name", "bot")
+        if not isinstance(name, str) or not 0 < len(name) <= 64:
+            raise ValueError(f"name: expected a bot name of 1-64 characters, got {name!r}")
+        wanted = request.get("slot")
+        if wanted is not None and wanted not in self.slots:
+            raise ValueError(f"slot: {wanted!r} is not a slot of match {self.id!r}; slots: {list(self.slots)}")
+        with self._cond:
+            token = request.get("token")
+            if token is not None:
+                slot = next((s for s in self.slots.values() if same_token(token, s.token)), None)
+                if slot is None or slot.left or (wanted is not None and wanted != slot.name):
+                    raise ValueError(f"token: not valid for {'slot ' + repr(wanted) if wanted else 'any slot'} "
+                                     f"of match {self.id!r}")
+                slot.new_lease()
+            else:
+                if self.status != "waiting":
+                    raise ValueError(f"match {self.id!r} is {self.status}; only a bot holding its slot token can "
+                                     "rejoin")
+                open_slots = [s for s in self.slots.values() if s.occupant == "open"]
+                if wanted is not None:
+                    slot = self.slots[wanted]
+                    if slot.occupant != "open":
+                        raise ValueError(f"slot: {wanted!r} of match {self.id!r} is taken; open slots: "
+                                         f"{[s.name for s in open_slots]}")
+                elif open_slots:
+                    slot = open_slots[0]
+                else:
+                    raise ValueError(f"match {self.id!r} has no open slot")
+                obs_builder = action_parser = None
+                obs_spec = action_spec = None
+                if request.get("observation") is not None:
+                    obs_spec = _spec(request["observation"], "observation")
+                    options = {k: v for k, v in obs_spec.items() if k != "name"}
+                    obs_builder = make_obs_builder(obs_spec["name"], **options)
+                    obs_builder.space(self.env.rules.blue_size, self.env.rules.orange_size)  # fits this match?
+                if request.get("action") is not None:
+                    action_spec = _spec(request["action"], "action")
+                    action_parser = make_action_parser(action_spec["name"],
+                                                       **{k: v for k, v in action_spec.items() if k != "name"})
+                slot.take(name)
+                slot.obs_spec, slot.action_spec = obs_spec, action_spec
+                slot.obs_builder, slot.action_parser = obs_builder, action_parser
+                slot.with_state = bool(request.get("with_state", True))
+            self._cond.notify_all()
+            return self._join_reply(slot)
+
+    def _join_reply(self, slot: Slot) -> dict:
+        rules = self.env.rules
+        obs_space = (slot.obs_builder or self._obs.default).space(rules.blue_size, rules.orange_size)
+        return {
+            "ok": True, "match": self.id, "slot": slot.name, "token": slot.token, "lease": slot.lease,
+            "status": self.status, "config": self.config, "mode": self.options.mode,
+            "deadline_ms": self.options.deadline_ms, "decision_ticks": self.decision_ticks,
+            "tick_rate": int(REALTIME_TICK_HZ),
+            "observation": slot.obs_spec or self.config["observation"],
+            "action": slot.action_spec or self.config["action"],
+            "observation_space": encode_space(obs_space),
+            "action_space": encode_space((slot.action_parser or self._match_parser).space()),
+            "keys": {leaf: self.keys.slot(self.id, slot.name, leaf) for leaf in ("obs", "act", "error")}
+            | {"alive": self.keys.bot_alive(self.id, slot.name, slot.lease), "state": self.keys.state(self.id),
+               "events": self.keys.events(self.id), "server_alive": self.keys.server_alive},
+        }
+
+    def leave(self, request: dict) -> dict:
+        with self._cond:
+            slot = next((s for s in self.slots.values() if same_token(request.get("token"), s.token)), None)
+            if slot is None:
+                raise ValueError(f"token: not valid for any slot of match {self.id!r}")
+            if self.status == "waiting":
+                slot.release()
+            else:  # mid-match the seat stays, played by replacement actions; the token stops working
+                slot.left, slot.token, slot.alive = True, None, False
+            self._cond.notify_all()
+            return {"ok": True, "match": self.id, "slot": slot.name}
+
+    def set_alive(self, slot_name: str, lease: str, alive: bool) -> None:
+        with self._cond:
+            slot = self.slots.get(slot_name)
+            if slot is not None and slot.lease is not None and slot.lease == lease and not slot.left:
+                slot.alive = alive
+                self._cond.notify_all()
+
+    def stop(self) -> None:
+        self._stop.set()
+        with self._cond:
+            self._cond.notify_all()
+
+    def join_thread(self, timeout_s: float | None = None) -> None:
+        if self._thread.is_alive():
+            self._thread.join(timeout_s)
+
+    def summary(self) -> dict:
+        """What the lobby lists for this match."""
+        with self._cond:
+            return self._summary()
+
+    def _summary(self) -> dict:
+        return {"id": self.id, "status": self.status, "mode": self.options.mode,
+                "config": self.options.config if isinstance(self.options.config, str) else self.config["mode"],
+                "slots": len(self.slots), "joined": sum(s.occupant == "remote" for s in self.slots.values()),
+                "decision": self.decision, "score": self.scoreboard.get("score"), "result_key": self.result_key}
+
+    def inspect(self) -> dict:
+        """Everything about the match: options, config, slots and their counters, rejections, timing."""
+        with self._cond:
+            return {**self._summary(), "options": self.options.as_dict(), "game_config": self.config,
+                    "seed": self.seed, "created_at": self.created_at, "started_at": self.started_at,
+                    "scoreboard": self.scoreboard, "slot_status": {n: s.public() for n, s in self.slots.items()},
+                    "rejected": dict(self.rejected), "events": dict(self._event_counts), "error": self.error,
+                    "timing": self._timing()}
+
+    # ------------------------------------------------------------------------------------------ actions in
+    def _reject(self, reason: str, slot: Slot | None = None, message: str | None = None) -> None:
+        with self._cond:
+            self.rejected[reason] += 1
+            if slot is not None and reason == "invalid_action":
+                slot.counts["invalid"] += 1
+        if slot is not None and message is not None:
+            # Only the token holder learns why: the error goes to its own slot's key.
+            self.session.put(self.keys.slot(self.id, slot.name, "error"),
+                             pack({"match": self.id, "slot": slot.name, "error": message}))
+
+    def on_action(self, sample) -> None:
+        """Zenoh callback for ``.../<slot>/act``: check everything, then hand the controls to the match."""
+        payload = sample.payload
+        if len(payload) > MAX_ACTION_BYTES:
+            self._reject("oversize")
+            return
+        try:
+            message = unpack(payload.to_bytes(), MAX_ACTION_BYTES)
+        except VersionError:
+            self._reject("bad_version")
+            return
+        except ProtocolError:
+            self._reject("malformed")
+            return
+        slot = self.slots.get(self.keys.parse_action_slot(self.id, str(sample.key_expr)) or "")
+        if slot is None:
+            self._reject("unknown_slot")
+            return
+        if not same_token(message.get("token"), slot.token):
+            self._reject("bad_token")
+            return
+        decision = message.get("decision")
+        if isinstance(decision, bool) or not isinstance(decision, int):
+            self._reject("invalid_action", slot, f"decision: expected the decision number, got {decision!r}")
+            return
+        try:
+            controls = (slot.action_parser or self._match_parser).parse(slot.name, message.get("action"))
+        except ValueError as e:
+            self._reject("invalid_action", slot, str(e))
+            return
+        with self._cond:
+            if self.options.mode == "lockstep":
+                if decision != self.decision:
+                    late = decision < self.decision
+                    self.rejected["late" if late else "future_decision"] += 1
+                    slot.counts["late" if late else "invalid"] += 1
+                    return
+                slot.pending = controls
+            else:  # realtime: the newest action wins, whenever it arrives
+                if decision > self.decision or decision < slot.acted_decision:
+                    self.rejected["future_decision" if decision > self.decision else "late"] += 1
+                    return
+                slot.last_controls = controls
+            slot.acted_decision = decision
+            slot.counts["received"] += 1
+            self._cond.notify_all()
+
+    # ------------------------------------------------------------------------------------------ the match
+    def _run(self) -> None:
+        try:
+            self._wait_until_ready()
+            if self._stop.is_set():
+                self._end("stopped")
+                return
+            self._play()
+            self._end("stopped" if self._stop.is_set() else "finished")
+        except Exception as e:  # a bug must not take the server down: the match fails, others go on
+            log.error("match %s failed:\n%s", self.id, traceback.format_exc())
+            self.error = f"{type(e).__name__}: {e}"
+            self._end("failed")
+
+    def _wait_until_ready(self) -> None:
+        deadline = self.created_at + self.options.ready_timeout_s
+        with self._cond:
+            while not self._stop.is_set():
+                if all(s.waits_for for s in self.slots.values()):
+                    break
+                remaining = deadline - time.time()
+                if remaining <= 0:
+                    break
+                self._cond.wait(remaining)
+            for slot in self.slots.values():
+                if slot.occupant == "open":
+                    slot.occupant, slot.bot = "fill", self.options.fill
+            self.status = "running"
+            self.started_at = time.time()
+        from rocketdrl_ma.policies.registry import load_policy
+        for slot in self.slots.values():
+            if slot.occupant == "fill" and self.options.fill != "idle":
+                self._fill[slot.name] = load_policy(self.options.fill)
+        pubs = {"state": self.keys.state(self.id), "events": self.keys.events(self.id)}
+        pubs.update({slot: self.keys.slot(self.id, slot, "obs") for slot in self.slots})
+        import zenoh
+        # DROP, not BLOCK: a bot whose link is congested must never stall the match thread.
+        self._publishers = {name: self.session.declare_publisher(
+            key, express=True, congestion_control=zenoh.CongestionControl.DROP) for name, key in pubs.items()}
+
+    def _fill_controls(self, state) -> dict[str, CarControls]:
+        return {name: policy.controls(name, state) for name, policy in self._fill.items()}
+
+    def _replacement(self, slot: Slot) -> CarControls:
+        return slot.last_controls if self.options.replacement == "repeat" else NEUTRAL
+
+    def _count_events(self, events: list[dict]) -> None:
+        for event in events:
+            self._event_counts[event["kind"]] += 1
+            if event["kind"] == "goal":
+                self._goals.append({k: event.get(k) for k in ("tick", "team", "scorer", "own_goal")})
+
+    def _play(self) -> None:
+        env = self.env
+        observations, _ = env.reset(seed=self.seed)
+        state = self._obs.state
+        for name, policy in self._fill.items():
+            policy.reset(state)
+        rewards = dict.fromkeys(self.slots, 0.0)
+        if self.options.mode == "lockstep":
+            self._lockstep(observations, rewards)
+        else:
+            self._realtime(observations, rewards)
+
+    def _lockstep(self, observations: dict, rewards: dict) -> None:
+        env, deadline_s = self.env, self.options.deadline_ms / 1e3
+        while env.agents and not self._stop.is_set():
+            t0 = time.perf_counter()
+            state = self._obs.state
+            self._publish(observations, rewards, state, done=False)
+            actions = self._fill_controls(state)
+            t_wait = time.perf_counter()
+            with self._cond:
+                until = t0 + deadline_s
+                while not self._stop.is_set():
+                    waiting = [s for s in self.slots.values() if s.waits_for and s.pending is None]
+                    remaining = until - time.perf_counter()
+                    if not waiting or remaining <= 0:
+                        break
+                    self._cond.wait(remaining)
+                for slot in self.slots.values():
+                    if slot.occupant != "remote":
+                        continue
+                    if slot.pending is not None:
+                        slot.last_controls = slot.pending
+                        actions[slot.name] = slot.pending
+                    else:
+                        slot.counts["missed" if slot.waits_for else "disconnected"] += 1
+                        actions[slot.name] = self._replacement(slot)
+                        slot.last_controls = actions[slot.name]
+                    slot.pending = None
+                self.decision += 1  # actions for the decision just closed are late from now on
+            self._wait_s.append(time.perf_counter() - t_wait)
+            for agent in env.agents:
+                actions.setdefault(agent, NEUTRAL)  # an idle fill slot
+            observations, rewards, _, _, _ = env.step(actions)
+            self._count_events(self._obs.state.events)
+            self._decision_s.append(time.perf_counter() - t0)
+        self._publish(observations, rewards, self._obs.state, done=True)
+
+    def _realtime(self, observations: dict, rewards: dict) -> None:
+        env, period = self.env, 1.0 / REALTIME_TICK_HZ
+        tick, next_t = 0, time.perf_counter()
+        fill: dict[str, CarControls] = {}
+        acc_rewards = dict.fromkeys(self.slots, 0.0)
+        events: list[dict] = []
+        last_decision_t = next_t
+        while env.agents and not self._stop.is_set():
+            if tick % self.decision_ticks == 0:
+                state = self._obs.state
+                with self._cond:
+                    if tick > 0:  # close the decision that just ended: who never answered it?
+                        for slot in self.slots.values():
+                            if slot.occupant == "remote" and slot.acted_decision < self.decision:
+                                slot.counts["missed" if slot.waits_for else "disconnected"] += 1
+                        self.decision += 1
+                        now = time.perf_counter()
+                        self._decision_s.append(now - last_decision_t)
+                        last_decision_t = now
+                self._publish(observations, acc_rewards, state, done=False, events=events)
+                acc_rewards, events = dict.fromkeys(self.slots, 0.0), []
+                fill = self._fill_controls(state)
+            with self._cond:
+                actions = {s.name: s.last_controls if s.waits_for or self.options.replacement == "repeat"
+                           else NEUTRAL for s in self.slots.values() if s.occupant == "remote"}
+            actions.update(fill)
+            for agent in env.agents:
+                actions.setdefault(agent, NEUTRAL)
+            self._obs.active = (tick + 1) % self.decision_ticks == 0
+            observations, step_rewards, _, _, _ = env.step(actions)
+            for agent, r in step_rewards.items():
+                acc_rewards[agent] += r
+            events += self._obs.state.events
+            self._count_events(self._obs.state.events)
+            tick += 1
+            next_t += period
+            delay = next_t - time.perf_counter()
+            if delay > 0:
+                self._stop.wait(delay)
+            elif delay < -0.25:  # far behind (a stall): resynchronise rather than rush through the backlog
+                next_t = time.perf_counter()
+        self._obs.active = True
+        self._publish(observations, acc_rewards, self._obs.state, done=True, events=events)
+
+    # ------------------------------------------------------------------------------------------ publishing
+    def _slots_public(self) -> dict:
+        with self._cond:
+            return {n: s.public() for n, s in self.slots.items()}
+
+    def _publish(self, observations: dict, rewards: dict, state, done: bool, events: list | None = None) -> None:
+        events = list(state.events) if events is None else events
+        self.scoreboard = self.env.rules.scoreboard()
+        state_bytes = pack_value(encode_state(state))
+        decision = self.decision
+        common = {"match": self.id, "decision": decision, "scoreboard": self.scoreboard, "done": done}
+        summary = self.env.rules.summary() if done else None
+        for name, slot in self.slots.items():
+            if slot.occupant != "remote" or slot.left:
+                continue
+            message = {**common, "slot": name, "reward": float(rewards.get(name, 0.0)), "events": events,
+                       "obs": observations.get(name, np.zeros(0, np.float32))}
+            if done:
+                message.update(summary=summary, reason="stopped" if self._stop.is_set() else "finished")
+            raw = {"state": state_bytes} if slot.with_state else {}
+            self._publishers[name].put(pack_with_raw(message, raw))
+        self._publishers["state"].put(pack_with_raw({**common, "status": self.status, "slots": self._slots_public()},
+                                                    {"state": state_bytes}))
+        if events:
+            self._publishers["events"].put(pack({**common, "events": events}))
+
+    def _timing(self) -> dict:
+        return {"decisions": len(self._decision_s), "decision_ms_median": _percentile_ms(self._decision_s, 50),
+                "decision_ms_p99": _percentile_ms(self._decision_s, 99),
+                "wait_ms_median": _percentile_ms(self._wait_s, 50), "wait_ms_p99": _percentile_ms(self._wait_s, 99),
+                "wall_s": round(sum(self._decision_s), 4)}
+
+    def _end(self, status: str) -> None:
+        rules = self.env.rules
+        summary = None
+        if status == "finished":
+            summary = rules.summary()
+            state = self._obs.state
+            slots = {n: s.public() for n, s in self.slots.items()}
+            key = f"{self.keys.server}/{self.id}/{uuid.uuid4().hex[:12]}"
+            result = MatchResult(
+                match_key=key, source="server", config=self.config,
+                entrants={n: s.bot or "idle" for n, s in self.slots.items()},
+                score_blue=int(state.score[0]), score_orange=int(state.score[1]),
+                duration_s=state.tick / state.tick_rate, seed=self.seed,
+                details={"match_id": self.id, "mode": self.options.mode, "options": self.options.as_dict(),
+                         "events": dict(self._event_counts), "goals": self._goals,
+                         "stats": summary.get("stats", {}), "overtime": bool(summary.get("overtime", False)),
+                         "missed_decisions": {n: s["missed"] + s["disconnected"] for n, s in slots.items()},
+                         "bots": slots, "rejected": dict(self.rejected), "timing": self._timing()})
+            self._record(result)
+            self.result_key = key
+        with self._cond:
+            self.status = status
+        if "events" in self._publishers:
+            self._publishers["events"].put(pack({"match": self.id, "decision": self.decision, "final": True,
+                                                 "status": status, "summary": summary, "error": self.error,
+                                                 "result_key": self.result_key}))
+        self._close_zenoh()
+        self.env.close()
+
+    def _close_zenoh(self) -> None:
+        for declared in [self._act_sub, *self._publishers.values()]:
+            try:
+                declared.undeclare()
+            except Exception:  # the session may already be closing
+                pass
+        self._publishers = {}
+
+    def discard(self) -> None:
+        """Stop a match that never ran (server shutdown before start) and free what it holds."""
+        self.stop()
+        self.join_thread(5.0)

@@ -1,0 +1,118 @@
+"""One match's seats: who plays each agent slot, its secret token, its counters; and the per-slot
+observation builder and action parser the server plugs into the env.
+
+A slot is ``open`` (nobody yet), ``remote`` (a bot joined and holds its token; it may be connected or
+not, per its Zenoh liveliness token) or ``fill`` (the server plays it: a scripted bot or idle).
+"""
+from __future__ import annotations
+
+import hmac
+import secrets
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rocketdrl_ma.env.actions import ActionParser
+from rocketdrl_ma.env.observations import ObsBuilder
+from rocketdrl_ma.physics import CarControls
+from rocketdrl_ma.rules.state import GameState
+
+NEUTRAL = CarControls()
+_NO_OBS = np.zeros(0, dtype=np.float32)
+
+
+def same_token(given: object, expected: str | None) -> bool:
+    """Constant-time token check; anything but a matching string is False."""
+    if not isinstance(given, str) or expected is None:
+        return False
+    return hmac.compare_digest(given.encode("utf-8", "replace"), expected.encode())
+
+
+@dataclass
+class Slot:
+    name: str
+    occupant: str = "open"  # open | remote | fill
+    bot: str | None = None  # the entrant's name
+    token: str | None = None
+    lease: str | None = None  # public id of the current connection's liveliness token
+    alive: bool = False
+    left: bool = False  # the bot left a running match: its token no longer works
+    obs_spec: dict | None = None  # a requested observation builder (None: the match's)
+    action_spec: dict | None = None
+    obs_builder: ObsBuilder | None = None
+    action_parser: ActionParser | None = None
+    with_state: bool = True
+    last_controls: CarControls = field(default_factory=CarControls)
+    pending: CarControls | None = None  # this decision's action, once it arrived
+    acted_decision: int = -1  # last decision this slot answered
+    counts: dict = field(default_factory=lambda: dict.fromkeys(
+        ("received", "missed", "disconnected", "late", "invalid"), 0))
+
+    def take(self, bot: str) -> None:
+        self.occupant, self.bot, self.left = "remote", bot, False
+        self.token = secrets.token_urlsafe(24)
+        self.new_lease()
+
+    def new_lease(self) -> None:
+        self.lease = secrets.token_hex(8)
+        self.alive = False
+
+    def release(self) -> None:
+        self.occupant, self.bot, self.token, self.lease, self.alive = "open", None, None, None, False
+        self.obs_spec = self.action_spec = self.obs_builder = self.action_parser = None
+
+    @property
+    def waits_for(self) -> bool:
+        """A connected remote bot the server expects an action from."""
+        return self.occupant == "remote" and self.alive and not self.left
+
+    def public(self) -> dict:
+        return {"occupant": self.occupant, "bot": self.bot, "connected": self.waits_for, "left": self.left,
+                **self.counts}
+
+
+class SlotObservations(ObsBuilder):
+    """The env's observation builder during a server match: each remote slot gets its own builder's output
+    (the match's, or the one its bot asked for); slots the server plays get an empty array, since nobody
+    reads it. It also keeps the state the env built the last observations from (``state``)."""
+
+    def __init__(self, default: ObsBuilder, slots: dict[str, Slot]):
+        self.default, self.slots = default, slots
+        self.active = True  # realtime mode builds observations only on decision ticks
+        self.state: GameState | None = None
+
+    def space(self, blue_size: int, orange_size: int):
+        return self.default.space(blue_size, orange_size)
+
+    def reset(self, state: GameState) -> None:
+        self.state = state
+        self.default.reset(state)
+        for slot in self.slots.values():
+            if slot.obs_builder is not None:
+                slot.obs_builder.reset(state)
+
+    def build(self, agent: str, state: GameState) -> np.ndarray:
+        self.state = state
+        slot = self.slots[agent]
+        if not self.active or slot.occupant != "remote":
+            return _NO_OBS
+        return (slot.obs_builder or self.default).build(agent, state)
+
+
+class ControlsPassThrough(ActionParser):
+    """The env's action parser during a server match: the server parses and checks every bot's action
+    with that slot's parser when it arrives, so the env receives ``CarControls`` only."""
+
+    def __init__(self, space_of: ActionParser):
+        self._space = space_of.space()
+
+    def space(self):
+        return self._space
+
+    def parse(self, agent: str, action, state: GameState | None = None) -> CarControls:
+        if not isinstance(action, CarControls):
+            raise ValueError(f"action for {agent}: the server passes CarControls, got {type(action).__name__}")
+        return action
+
+    def encode(self, controls: CarControls) -> CarControls:
+        return controls
