@@ -12,7 +12,7 @@ import argparse
 import importlib
 import sys
 
-COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.policies.commands",)
+COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.policies.commands", "rocketdrl_ma.server.commands")
 
 
 def play(config: str, blue: str, orange: str, video: str | None, seed: int, clock_s: float | None,
