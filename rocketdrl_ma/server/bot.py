@@ -29,6 +29,8 @@ from .settings import DEFAULT_ENDPOINT, ZenohSettings
 log = logging.getLogger(__name__)
 #: observations carry the game state; a generous bound that still refuses absurd messages
 MAX_OBS_BYTES = 16 * 1024 * 1024
+#: a bot that hears nothing for this long asks the lobby whether its match is still on
+IDLE_CHECK_S = 2.0
 
 
 class ServerError(RuntimeError):
@@ -196,9 +198,9 @@ class Bot:
         session = session if session is not None else (zenoh or local_client_settings()).open()
         declared: list[Any] = []
         try:
-            join = LobbyClient(session, server).join(match, slot, token=token, name=self.name,
-                                                     observation=self.observation, action=self.action,
-                                                     with_state=self.with_state)
+            lobby = LobbyClient(session, server)
+            join = lobby.join(match, slot, token=token, name=self.name, observation=self.observation,
+                              action=self.action, with_state=self.with_state)
             if on_joined is not None:
                 on_joined(join)
             report = BotReport(match, join.slot, join.token)
@@ -226,7 +228,7 @@ class Bot:
             # Declared last: the server waits for this token, and by then our subscriber is in place.
             declared.append(liveliness.declare_token(join.keys["alive"]))
             self.on_join(join)
-            self._play(join, mailbox, publisher, report, idle_timeout_s)
+            self._play(join, lobby, mailbox, publisher, report, idle_timeout_s)
             report.errors = list(mailbox.errors)
             return report
         finally:
@@ -238,16 +240,29 @@ class Bot:
             if own:
                 session.close()
 
-    def _play(self, join: JoinInfo, mailbox: _Mailbox, publisher, report: BotReport,
+    def _play(self, join: JoinInfo, lobby: LobbyClient, mailbox: _Mailbox, publisher, report: BotReport,
               idle_timeout_s: float | None) -> None:
-        last_message = time.monotonic()
+        last_message = last_check = time.monotonic()
         while True:
             raw = mailbox.take(0.5)
             if raw is None:
+                now = time.monotonic()
                 if mailbox.server_gone:
                     raise ServerGone(f"the match server left (liveliness {join.keys['server_alive']} is gone)")
-                if idle_timeout_s is not None and time.monotonic() - last_message > idle_timeout_s:
+                if idle_timeout_s is not None and now - last_message > idle_timeout_s:
                     raise TimeoutError(f"no message from match {join.match!r} for {idle_timeout_s} s")
+                if now - max(last_message, last_check) > IDLE_CHECK_S:
+                    # Quiet for a while: not started yet, or did we miss the end? Ask the lobby.
+                    last_check = now
+                    try:
+                        info = lobby.inspect(join.match)
+                    except ServerError:  # the server no longer knows the match: long over
+                        info = {"status": "finished"}
+                    if info["status"] in ("finished", "stopped", "failed"):
+                        report.summary, report.reason = info.get("summary"), info["status"]
+                        self.on_end({"agent": join.slot, "done": True, "summary": report.summary,
+                                     "reason": report.reason, "state": None})
+                        return
                 continue
             last_message = time.monotonic()
             message = unpack(raw, MAX_OBS_BYTES)

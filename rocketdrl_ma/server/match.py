@@ -76,6 +76,7 @@ class MatchRunner:
         self.started_at: float | None = None
         self.seed = options.seed if options.seed is not None else int.from_bytes(uuid.uuid4().bytes[:4], "little")
         self.result_key: str | None = None
+        self.final_summary: dict | None = None
         self.error: str | None = None
         self.decision = 0  # the decision whose actions are being collected
         self.scoreboard: dict = {}
@@ -205,7 +206,7 @@ class MatchRunner:
                     "seed": self.seed, "created_at": self.created_at, "started_at": self.started_at,
                     "scoreboard": self.scoreboard, "slot_status": {n: s.public() for n, s in self.slots.items()},
                     "rejected": dict(self.rejected), "events": dict(self._event_counts), "error": self.error,
-                    "timing": self._timing()}
+                    "timing": self._timing(), "summary": self.final_summary}
 
     # ------------------------------------------------------------------------------------------ actions in
     def _reject(self, reason: str, slot: Slot | None = None, message: str | None = None) -> None:
@@ -429,11 +430,21 @@ class MatchRunner:
             if done:
                 message.update(summary=summary, reason="stopped" if self._stop.is_set() else "finished")
             raw = {"state": state_bytes} if slot.with_state else {}
-            self._publishers[name].put(pack_with_raw(message, raw))
+            self._put(name, pack_with_raw(message, raw), final=done)
         self._publishers["state"].put(pack_with_raw({**common, "status": self.status, "slots": self._slots_public()},
                                                     {"state": state_bytes}))
         if events:
             self._publishers["events"].put(pack({**common, "events": events}))
+
+    def _put(self, name: str, payload: bytes, final: bool = False) -> None:
+        if not final:
+            self._publishers[name].put(payload)
+            return
+        # The last message of a match must arrive (a bot waits for it): it may wait for a full queue,
+        # which per-decision messages never do. Zenoh bounds that wait and closes a link that stays stuck.
+        import zenoh
+        self.session.put(self._publishers[name].key_expr, payload, express=True,
+                         congestion_control=zenoh.CongestionControl.BLOCK)
 
     def _timing(self) -> dict:
         return {"decisions": len(self._decision_s), "decision_ms_median": _percentile_ms(self._decision_s, 50),
@@ -461,12 +472,13 @@ class MatchRunner:
                          "bots": slots, "rejected": dict(self.rejected), "timing": self._timing()})
             self._record(result)
             self.result_key = key
+        self.final_summary = summary
         with self._cond:
             self.status = status
         if "events" in self._publishers:
-            self._publishers["events"].put(pack({"match": self.id, "decision": self.decision, "final": True,
-                                                 "status": status, "summary": summary, "error": self.error,
-                                                 "result_key": self.result_key}))
+            self._put("events", pack({"match": self.id, "decision": self.decision, "final": True, "status": status,
+                                      "summary": summary, "error": self.error, "result_key": self.result_key}),
+                      final=True)
         self._close_zenoh()
         self.env.close()
 

@@ -1,0 +1,224 @@
+"""The lobby and matches on a real in-process server (Zenoh peer on a free loopback port): create, list,
+inspect, stop; joining; lockstep and real-time play with SDK bots; replacement actions; results."""
+from __future__ import annotations
+
+import threading
+import time
+
+import msgpack
+import numpy as np
+import pytest
+from gymnasium import spaces
+from server_helpers import SHORT, RawBot, wait_for
+
+from rocketdrl_ma.env.actions import SeedActions
+from rocketdrl_ma.policies.scripted import make_scripted
+from rocketdrl_ma.results import ResultsStore
+from rocketdrl_ma.rules.state import GameState
+from rocketdrl_ma.server import PROTOCOL_VERSION, Bot, PolicyBot, ServerError
+from rocketdrl_ma.server.protocol import pack, unpack
+
+
+def raw_query(running, payload: bytes) -> tuple[bool, dict]:
+    """One lobby get with an arbitrary payload: (ok, decoded reply)."""
+    for reply in running.session.get(running.server.keys.lobby, payload=payload, timeout=5.0):
+        if reply.ok is not None:
+            return True, unpack(reply.ok.payload.to_bytes(), 1 << 24)
+        return False, unpack(reply.err.payload.to_bytes())
+    raise AssertionError("no reply")
+
+
+def test_create_list_inspect_stop_several_matches(running):
+    lobby = running.lobby
+    a = lobby.create("matches/1v1.yaml", "a", ready_timeout_s=60)
+    b = lobby.create("minigames/penalty.yaml", "b", ready_timeout_s=60)
+    c = lobby.create({"mode": "match", "team_size": 3}, "c", ready_timeout_s=60, overrides={"clock_s": 60.0})
+    assert a["status"] == b["status"] == c["status"] == "waiting"
+    assert list(a["slot_status"]) == ["blue_0", "orange_0"] and list(b["slot_status"]) == ["blue_0"]
+    assert len(c["slot_status"]) == 6 and c["game_config"]["clock_s"] == 60.0
+    assert {m["id"]: m["status"] for m in lobby.list()} == {"a": "waiting", "b": "waiting", "c": "waiting"}
+    info = lobby.inspect("b")
+    assert info["game_config"]["mode"] == "penalty" and info["options"]["deadline_ms"] == 50
+    lobby.stop("a")
+    running.wait_status("a", ("stopped",))
+    assert {m["id"]: m["status"] for m in lobby.list()} == {"a": "stopped", "b": "waiting", "c": "waiting"}
+    with pytest.raises(ServerError, match="already exists"):
+        lobby.create("matches/1v1.yaml", "b")
+    with pytest.raises(ServerError, match=r"unknown key\(s\) \['clok_s'\]"):
+        lobby.create("matches/1v1.yaml", overrides={"clok_s": 3})
+    with pytest.raises(ServerError, match="no such file"):
+        lobby.create("matches/9v9.yaml")
+    with pytest.raises(ServerError, match="replacement"):
+        lobby.create("matches/1v1.yaml", replacement="sometimes")
+    with pytest.raises(ServerError, match="no match 'zz'"):
+        lobby.inspect("zz")
+    with pytest.raises(ServerError, match="unknown lobby op 'dance'"):
+        lobby.request("dance")
+    assert len(ResultsStore(running.results)) == 0  # stopped matches are not results
+
+
+def test_bad_requests_get_error_replies_and_the_server_goes_on(running):
+    ok, reply = raw_query(running, msgpack.packb({"v": PROTOCOL_VERSION + 98, "op": "list"}))
+    assert not ok and reply["error"] == (f"v: protocol version {PROTOCOL_VERSION + 98} is not supported; this "
+                                         f"server speaks version {PROTOCOL_VERSION}")
+    ok, reply = raw_query(running, np.random.default_rng(1).bytes(1000))
+    assert not ok and "not valid msgpack" in reply["error"]
+    ok, reply = raw_query(running, b"\x00" * (10 * 1024 * 1024))
+    assert not ok and "over the limit" in reply["error"]
+    ok, reply = raw_query(running, msgpack.packb([1, 2]))
+    assert not ok and "expected a map" in reply["error"]
+    ok, reply = raw_query(running, pack({"op": "create", "config": "matches/1v1.yaml", "id": "x/y"}))
+    assert not ok and reply["error"].startswith("id:")
+    assert running.server.requests_rejected == 5
+    ok, reply = raw_query(running, pack({"op": "list"}))
+    assert ok and reply["matches"] == []
+
+
+def test_admin_token_guards_create_and_stop(tmp_path):
+    from server_helpers import Running
+    r = Running(tmp_path, admin_token="s3cret")
+    try:
+        with pytest.raises(ServerError, match="admin token"):
+            r.lobby.create("matches/1v1.yaml", "m")
+        r.lobby.create("matches/1v1.yaml", "m", admin_token="s3cret")
+        with pytest.raises(ServerError, match="admin token"):
+            r.lobby.stop("m", admin_token="guess")
+        assert r.lobby.list()[0]["id"] == "m"  # reading needs no token
+    finally:
+        r.close()
+
+
+def test_joining_slots_tokens_and_requested_formats(running):
+    lobby = running.lobby
+    lobby.create("matches/2v2.yaml", "m", ready_timeout_s=60)
+    first = lobby.join("m")
+    assert first.slot == "blue_0" and len(first.token) >= 32 and first.status == "waiting"
+    assert first.observation_space.shape == (127,) and first.action_space.shape == (8,)
+    named = lobby.join("m", "orange_1", observation="seed_sensors", action="lookup")
+    assert named.slot == "orange_1" and named.observation_space.shape == (18,)
+    assert named.action_space == spaces.Discrete(90) and named.observation == {"name": "seed_sensors"}
+    with pytest.raises(ServerError, match=r"'orange_1' of match 'm' is taken; open slots: \['blue_1', 'orange_0'\]"):
+        lobby.join("m", "orange_1")
+    with pytest.raises(ServerError, match="'purple_0' is not a slot"):
+        lobby.join("m", "purple_0")
+    with pytest.raises(ServerError, match="unknown observation builder 'eyes'"):
+        lobby.join("m", observation="eyes")
+    again = lobby.join("m", token=first.token)  # a reconnect keeps the slot and token, with a new lease
+    assert (again.slot, again.token) == ("blue_0", first.token) and again.lease != first.lease
+    with pytest.raises(ServerError, match="token: not valid"):
+        lobby.join("m", token="x" * 32)
+    with pytest.raises(ServerError, match="token: not valid"):
+        lobby.join("m", "orange_1", token=first.token)  # a token works for its own slot only
+    lobby.leave("m", first.token)
+    assert lobby.inspect("m")["slot_status"]["blue_0"]["occupant"] == "open"
+    lobby.join("m"), lobby.join("m"), lobby.join("m")
+    with pytest.raises(ServerError, match="no open slot"):
+        lobby.join("m")
+
+
+class Recorder(Bot):
+    """An SDK bot with its own sensors and action format (the seed's) that remembers what it saw; it
+    chases the ball, answering in the seed's 5-number format."""
+
+    observation = "seed_sensors"
+    action = "seed"
+    name = "recorder"
+
+    def __init__(self):
+        self.seen: list[tuple] = []
+        self.chaser, self.encoder = make_scripted("ball_chaser"), SeedActions()
+
+    def act(self, obs, info):
+        self.seen.append((obs.shape, obs.dtype, info["decision"], isinstance(info["state"], GameState)))
+        return self.encoder.encode(self.chaser.act(info["agent"], info["state"]))
+
+
+def play_threads(*jobs) -> dict:
+    reports, errors = {}, []
+
+    def run(key, fn):
+        try:
+            reports[key] = fn()
+        except Exception as e:
+            errors.append(e)
+    threads = [threading.Thread(target=run, args=job) for job in jobs]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(120)
+    if errors:
+        raise errors[0]
+    return reports
+
+
+def test_lockstep_match_with_sdk_bots_records_a_result(running):
+    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=60, seed=7)
+    recorder = Recorder()
+    reports = play_threads(
+        ("blue", lambda: recorder.run("m", "blue_0", server="test", zenoh=running.client_settings)),
+        ("orange", lambda: PolicyBot("scripted:goalie").run("m", "orange_0", server="test",
+                                                            zenoh=running.client_settings)))
+    info = running.wait_status("m")
+    shapes = {s[:2] for s in recorder.seen}
+    assert shapes == {((18,), np.dtype(np.float32))} and all(s[3] for s in recorder.seen)
+    assert [s[2] for s in recorder.seen] == list(range(len(recorder.seen)))  # every decision, in order
+    assert reports["blue"].reason == "finished" and reports["blue"].decisions == info["decision"]
+    assert info["slot_status"]["blue_0"]["received"] == info["decision"]
+    [result] = ResultsStore(running.results).results()
+    assert result.source == "server" and result.match_key == info["result_key"] and result.seed == 7
+    assert result.entrants == {"blue_0": "recorder", "orange_0": "scripted:goalie"}
+    assert (result.score_blue, result.score_orange) == (reports["blue"].summary["score"]["blue"],
+                                                        reports["blue"].summary["score"]["orange"])
+    assert result.details["missed_decisions"] == {"blue_0": 0, "orange_0": 0}
+    assert result.details["events"].get("touch", 0) >= 1 and result.details["mode"] == "lockstep"
+    assert result.duration_s >= 3.0 and result.config["clock_s"] == 3.0
+    assert result.details["stats"]["blue_0"]["touches"] == result.details["events"]["touch"] - \
+        result.details["stats"]["orange_0"]["touches"]
+
+
+def test_readiness_timeout_fills_empty_slots(running):
+    running.lobby.create("matches/2v2.yaml", "idle", overrides=SHORT, ready_timeout_s=0.3, fill="idle")
+    running.lobby.create("matches/2v2.yaml", "chase", overrides=SHORT, ready_timeout_s=0.3)
+    idle, chase = running.wait_status("idle"), running.wait_status("chase")
+    assert {s["occupant"] for s in idle["slot_status"].values()} == {"fill"}
+    results = {r.details["match_id"]: r for r in ResultsStore(running.results).results()}
+    assert set(results["idle"].entrants.values()) == {"idle"}
+    assert set(results["chase"].entrants.values()) == {"scripted:ball_chaser"}
+    assert results["idle"].details["events"].get("touch", 0) == 0  # idle cars never reach the ball
+    assert results["chase"].details["events"]["touch"] > 0
+
+
+@pytest.mark.parametrize("replacement", ["repeat", "neutral"])
+def test_missing_actions_are_replaced_and_counted(running, replacement):
+    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=0.5, fill="idle",
+                         deadline_ms=20, replacement=replacement)
+    states = []
+    sub = running.session.declare_subscriber(running.server.keys.state("m"),
+                                             lambda s: states.append(unpack(s.payload.to_bytes(), 1 << 24)))
+    full_throttle = np.array([1, 0, 0, 0, 0, -1, -1, -1], np.float32)
+    # Full throttle at decision 0, then silence: every later decision misses its deadline
+    bot = RawBot(running.session, running.lobby, "m", "blue_0",
+                 answer=lambda m: full_throttle if m["decision"] == 0 else None)
+    info = running.wait_status("m")
+    controls = [s["state"]["last_controls"]["blue_0"][0] for s in states if s["decision"] >= 3]
+    assert controls and set(controls) == ({1.0} if replacement == "repeat" else {0.0})
+    slot = info["slot_status"]["blue_0"]
+    assert slot["received"] == 1 and slot["missed"] == info["decision"] - 1
+    assert ResultsStore(running.results).results()[0].details["missed_decisions"]["blue_0"] == slot["missed"]
+    sub.undeclare()
+    bot.disconnect()
+
+
+def test_realtime_mode_ticks_at_wall_clock(running):
+    game_s = 1.5
+    running.lobby.create("matches/1v1.yaml", "rt", mode="realtime", ready_timeout_s=0.5,
+                         overrides={**SHORT, "clock_s": game_s})
+    t0 = time.monotonic()
+    report = PolicyBot("scripted:ball_chaser").run("rt", "blue_0", server="test", zenoh=running.client_settings)
+    wall_s = time.monotonic() - t0
+    info = running.wait_status("rt")
+    [result] = ResultsStore(running.results).results()
+    # 120 ticks per second of wall clock: the game cannot run ahead of real time (lower bound only)
+    assert wall_s >= result.duration_s * 0.95 and result.duration_s >= game_s
+    assert info["decision"] == pytest.approx(result.duration_s * 15, abs=2)  # one decision per 8 ticks
+    assert report.decisions > info["decision"] // 2 and info["slot_status"]["blue_0"]["received"] > 0

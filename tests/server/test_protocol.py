@@ -1,0 +1,145 @@
+"""Wire format: msgpack maps with a protocol version, numpy arrays as raw bytes + dtype + shape,
+game states that survive the trip, and every kind of malformed payload refused with a reason."""
+from __future__ import annotations
+
+import dataclasses
+
+import msgpack
+import numpy as np
+import pytest
+
+import rocketdrl_ma
+from rocketdrl_ma.physics import PRESETS
+from rocketdrl_ma.rules.state import Obstacle
+from rocketdrl_ma.server.protocol import (PROTOCOL_VERSION, Keys, ProtocolError, VersionError, check_name,
+                                          decode_space, decode_state, encode_space, encode_state, pack,
+                                          pack_value, pack_with_raw, unpack)
+
+
+@pytest.mark.parametrize("dtype", ["<f4", "<f8", "<i8", "|u1", "|b1", ">i4"])
+def test_arrays_travel_as_raw_bytes_with_dtype_and_shape(dtype):
+    a = (np.arange(24) % 5).astype(dtype).reshape(2, 3, 4)
+    raw = pack({"a": a})
+    plain = msgpack.unpackb(raw, raw=False)  # what any msgpack library sees
+    assert plain["v"] == PROTOCOL_VERSION
+    assert plain["a"] == {"$nd": np.dtype(dtype).str, "shape": [2, 3, 4], "data": a.tobytes()}
+    back = unpack(raw)["a"]
+    assert back.dtype == np.dtype(dtype) and back.shape == (2, 3, 4) and np.array_equal(back, a)
+    back[0, 0, 0] = 1  # a writable copy, not a view of the message
+    assert unpack(raw)["a"].flags.writeable
+
+
+@pytest.mark.parametrize("bad, reason", [
+    ({"$nd": "|O", "shape": [1], "data": b"\0" * 8}, "not allowed"),
+    ({"$nd": "<U4", "shape": [1], "data": b"\0" * 16}, "not allowed"),
+    ({"$nd": "<c16", "shape": [1], "data": b"\0" * 16}, "not allowed"),
+    ({"$nd": "nonsense", "shape": [1], "data": b"\0"}, "dtype"),
+    ({"$nd": "<f4", "shape": [3], "data": b"\0" * 8}, "do not fill"),
+    ({"$nd": "<f4", "shape": [-1], "data": b""}, "shape"),
+    ({"$nd": "<f4", "shape": "3", "data": b"\0" * 12}, "shape"),
+    ({"$nd": "<f4", "shape": [3], "data": "text"}, "do not fill"),
+])
+def test_malformed_arrays_are_refused(bad, reason):
+    raw = msgpack.packb({"v": PROTOCOL_VERSION, "a": bad}, use_bin_type=True)
+    with pytest.raises(ProtocolError, match=reason):
+        unpack(raw)
+
+
+def test_objects_cannot_be_sent():
+    with pytest.raises(TypeError):
+        pack({"a": np.array([object()])})
+    with pytest.raises(TypeError):
+        pack({"a": object()})
+
+
+def test_version_size_and_garbage_checks():
+    other = msgpack.packb({"v": PROTOCOL_VERSION + 1, "op": "list"})
+    with pytest.raises(VersionError, match=f"version {PROTOCOL_VERSION + 1} is not supported; this server speaks "
+                                           f"version {PROTOCOL_VERSION}"):
+        unpack(other)
+    with pytest.raises(VersionError, match="None"):
+        unpack(msgpack.packb({"op": "list"}))
+    with pytest.raises(ProtocolError, match="expected a map"):
+        unpack(msgpack.packb([1, 2, 3]))
+    with pytest.raises(ProtocolError, match="not valid msgpack"):
+        unpack(np.random.default_rng(0).bytes(300))
+    with pytest.raises(ProtocolError, match="over the limit"):
+        unpack(pack({"blob": b"x" * 2000}), max_bytes=1000)
+
+
+def test_pack_with_raw_is_an_ordinary_map():
+    inner = {"x": np.ones(3, np.float32), "n": 4}
+    combined = pack_with_raw({"a": 1, "b": "two"}, {"inner": pack_value(inner)})
+    plain = unpack(combined)
+    assert plain["a"] == 1 and plain["b"] == "two" and plain["inner"]["n"] == 4
+    assert np.array_equal(plain["inner"]["x"], inner["x"])
+    assert plain.keys() == unpack(pack({"a": 1, "b": "two", "inner": inner})).keys()
+
+
+def _assert_states_equal(a, b):
+    assert (a.tick, a.tick_rate, a.score, a.clock_s, a.is_overtime, a.kickoff_pending, a.last_touch) == \
+           (b.tick, b.tick_rate, b.score, b.clock_s, b.is_overtime, b.kickoff_pending, b.last_touch)
+    assert a.cars.keys() == b.cars.keys()
+    for agent in a.cars:
+        for f in dataclasses.fields(a.cars[agent]):
+            assert np.array_equal(getattr(a.cars[agent], f.name), getattr(b.cars[agent], f.name)), (agent, f.name)
+    for f in ("pos", "vel", "ang_vel"):
+        assert np.array_equal(getattr(a.ball, f), getattr(b.ball, f))
+    assert np.array_equal(a.pad_timers, b.pad_timers)
+    assert a.last_controls == b.last_controls
+    assert a.car_configs == b.car_configs
+    assert a.events == b.events and a.mode_state == b.mode_state
+    assert len(a.obstacles) == len(b.obstacles)
+    for x, y in zip(a.obstacles, b.obstacles):
+        assert np.array_equal(x.center, y.center) and np.array_equal(x.half_extents, y.half_extents)
+
+
+def test_game_state_round_trip():
+    env = rocketdrl_ma.parallel_env("matches/2v2.yaml", kickoff_countdown_s=0.0)
+    env.reset(seed=3)
+    for _ in range(40):  # moving cars, used pads, touches
+        env.step({a: env.action_space(a).sample() for a in env.agents})
+    state = env.rules.game_state()
+    custom = dataclasses.replace(PRESETS["octane"], name="tall_octane", hitbox_size=(120.0, 86.0, 60.0))
+    state = dataclasses.replace(
+        state, obstacles=(Obstacle(np.array([0.0, 100.0, 50.0]), np.array([10.0, 20.0, 30.0])),),
+        car_configs={**state.car_configs, "blue_1": custom}, mode_state={"round": 2, "flags": [True, False]},
+        events=[{"kind": "touch", "tick": 5, "agent": "blue_0"}])
+    back = decode_state(unpack(pack({"state": encode_state(state)}))["state"])
+    _assert_states_equal(state, back)
+    assert back.car_configs["blue_0"] is PRESETS["octane"]  # a stock preset travels by name
+    env.close()
+
+
+def test_malformed_state_is_a_protocol_error():
+    env = rocketdrl_ma.parallel_env("matches/1v1.yaml")
+    env.reset(seed=0)
+    wire = unpack(pack({"s": encode_state(env.rules.game_state())}))["s"]
+    env.close()
+    broken = dict(wire, cars={"blue_0": {**wire["cars"]["blue_0"], "rot_mat": np.eye(3) * 2}})
+    with pytest.raises(ProtocolError, match="rot_mat"):
+        decode_state(broken)
+    with pytest.raises(ProtocolError, match="tick"):
+        decode_state({k: v for k, v in wire.items() if k != "tick"})
+    with pytest.raises(ProtocolError, match="unknown preset"):
+        decode_state(dict(wire, car_configs={"blue_0": "batmobile"}))
+
+
+def test_spaces_round_trip():
+    env = rocketdrl_ma.parallel_env("matches/1v1.yaml", action="lookup")
+    for space in (env.observation_space("blue_0"), env.action_space("blue_0")):
+        back = decode_space(unpack(pack({"s": encode_space(space)}))["s"])
+        assert back == space
+    env.close()
+
+
+def test_keys_and_names():
+    keys = Keys("lab")
+    assert keys.slot("m1", "blue_0", "obs") == "rocketdrl/lab/match/m1/blue_0/obs"
+    assert keys.parse_bot_alive(keys.bot_alive("m1", "orange_2", "ab12")) == ("m1", "orange_2", "ab12")
+    assert keys.parse_bot_alive("rocketdrl/other/match/m1/blue_0/alive/x") is None
+    assert keys.parse_action_slot("m1", "rocketdrl/lab/match/m1/blue_0/act") == "blue_0"
+    assert keys.parse_action_slot("m1", "rocketdrl/lab/match/m2/blue_0/act") is None
+    for bad in ("a/b", "*", "**", "", "x" * 65, "a$b", 3):
+        with pytest.raises(ValueError, match="server"):
+            check_name("server", bad)

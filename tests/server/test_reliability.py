@@ -1,0 +1,211 @@
+"""Nothing a bot does can stall or break a match: killed bots, slow bots, malformed and forged actions,
+join/leave churn, a killed server, and a server that listens on loopback only. Real Zenoh sessions on
+loopback, real bot subprocesses (``rocketdrl-ma bot`` and ``botproc.py``)."""
+from __future__ import annotations
+
+import os
+import signal
+import sqlite3
+
+import msgpack
+import numpy as np
+import psutil
+import pytest
+from server_helpers import SHORT, RawBot, wait_for
+
+from rocketdrl_ma.results import ResultsStore
+from rocketdrl_ma.server import LobbyClient
+from rocketdrl_ma.server.bot import local_client_settings
+from rocketdrl_ma.server.protocol import PROTOCOL_VERSION, pack, unpack
+
+NEUTRAL = np.array([0, 0, 0, 0, 0, -1, -1, -1], np.float32)
+
+
+def slot_info(running, match: str, slot: str) -> dict:
+    return running.lobby.inspect(match)["slot_status"][slot]
+
+
+@pytest.mark.slow
+def test_killed_bot_is_replaced_shown_disconnected_and_rejoins(running, procs):
+    # orange answers every decision 25 ms late (within the deadline): it sets a pace a test can follow
+    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 40.0}, ready_timeout_s=120)
+    blue = procs.bot(running.endpoint, "test", "m", "blue_0")
+    procs.botproc(running.endpoint, "test", "m", ["orange_0"], "--delay-ms", "25")
+    token = blue.line("joined match m as blue_0").rsplit("--token ", 1)[1]
+    wait_for(lambda: slot_info(running, "m", "blue_0")["received"] >= 20, 60, "blue to play 20 decisions")
+    os.kill(blue.pid, signal.SIGKILL)
+    gone = wait_for(lambda: (lambda s: s if not s["connected"] else None)(slot_info(running, "m", "blue_0")), 15,
+                    "liveliness to show blue_0 disconnected")
+    received_at_kill = gone["received"]
+    # the match goes on without it: decisions advance, blue's are replaced and counted as disconnected
+    wait_for(lambda: slot_info(running, "m", "blue_0")["disconnected"] >= 10, 30, "replaced decisions")
+    assert running.lobby.inspect("m")["status"] == "running"
+    rejoined = procs.bot(running.endpoint, "test", "m", "blue_0", token=token)
+    assert rejoined.line("joined match m as blue_0").endswith(token)
+    wait_for(lambda: (lambda s: s["connected"] and s["received"] > received_at_kill + 10)(
+        slot_info(running, "m", "blue_0")), 60, "the rejoined bot to play")
+    info = running.wait_status("m", timeout_s=120)
+    assert rejoined.wait(60) == 0 and "match m finished" in rejoined.line("match m")
+    [result] = ResultsStore(running.results).results()
+    slot = info["slot_status"]["blue_0"]
+    assert result.details["missed_decisions"]["blue_0"] == slot["missed"] + slot["disconnected"] > 0
+    assert slot["received"] + slot["missed"] + slot["disconnected"] == info["decision"]
+
+
+def test_slow_bot_never_slows_the_others(running, procs):
+    # the slow bot thinks 5x longer than the deadline (generous: the fast bot must answer within it)
+    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 2.0}, ready_timeout_s=120,
+                         deadline_ms=150)
+    fast = procs.bot(running.endpoint, "test", "m", "blue_0")
+    slow_bot = procs.botproc(running.endpoint, "test", "m", ["orange_0"], "--delay-ms", "750")
+    info = running.wait_status("m", timeout_s=120)
+    assert fast.wait(60) == 0 and slow_bot.wait(60) == 0
+    n = info["decision"]
+    slow, quick = info["slot_status"]["orange_0"], info["slot_status"]["blue_0"]
+    assert slow["missed"] >= 0.8 * n and slow["late"] > 0  # its answers come after the deadline: dropped
+    assert quick["missed"] <= 0.1 * n and quick["received"] >= 0.9 * n
+    # The match never waited for the slow bot: it only answered the decisions it found on waking, so it
+    # sent a fraction of them (were decisions held until it answered, it would have sent one per decision).
+    [sent] = [int(line.split()[2]) for line in slow_bot.lines if line.startswith("done orange_0")]
+    assert sent <= 0.5 * n and slow["received"] + slow["late"] <= sent
+    [result] = ResultsStore(running.results).results()
+    assert result.details["missed_decisions"]["orange_0"] == slow["missed"]
+
+
+def test_malformed_payloads_are_dropped_and_counted(running, procs):
+    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 30.0}, ready_timeout_s=120)
+    states = []
+    sub = running.session.declare_subscriber(running.server.keys.state("m"),
+                                             lambda s: states.append(unpack(s.payload.to_bytes(), 1 << 24)))
+    procs.bot(running.endpoint, "test", "m", "blue_0")
+    orange = RawBot(running.session, running.lobby, "m", "orange_0", answer=lambda m: NEUTRAL)
+    wait_for(lambda: len(orange.messages) > 5, 60, "the match to run")
+    key, token, put = orange.join.keys["act"], orange.join.token, running.session.put
+    decision = lambda: orange.messages[-1]["decision"]  # noqa: E731
+    put(key, np.random.default_rng(0).bytes(200))                                             # malformed
+    put(key, msgpack.packb([1, 2, 3]))                                                        # malformed
+    put(key, b"\x00" * (10 * 1024 * 1024))                                                    # oversize
+    put(key, msgpack.packb({"v": PROTOCOL_VERSION + 1, "token": token, "decision": 0, "action": [0] * 8}))
+    put(key, pack({"decision": decision(), "action": NEUTRAL}))                              # bad_token
+    put(key.replace("orange_0", "purple_0"), pack({"token": token, "decision": 0, "action": NEUTRAL}))
+    orange.send(np.zeros(5, np.float32), decision())                                          # invalid
+    orange.send(np.full(8, np.nan, np.float32), decision())                                   # invalid
+    orange.send(np.full(8, 7.0, np.float32), decision())                                      # invalid
+    orange.send({"$nd": "|O", "shape": [1], "data": b"\0" * 8}, decision())                   # malformed
+    expected = {"malformed": 3, "oversize": 1, "bad_version": 1, "bad_token": 1, "unknown_slot": 1,
+                "invalid_action": 3}
+    wait_for(lambda: all(running.lobby.inspect("m")["rejected"].get(k, 0) >= v for k, v in expected.items()),
+             30, f"the server to count {expected}")
+    wait_for(lambda: len(orange.errors) == 3, 10, "error messages to the token holder")
+    assert all(e.startswith("action for orange_0") for e in orange.errors), orange.errors
+    info = running.wait_status("m", timeout_s=120)
+    rejected = info["rejected"]
+    assert {k: rejected.get(k) for k in expected} == expected
+    assert info["slot_status"]["orange_0"]["invalid"] == 3
+    assert info["slot_status"]["orange_0"]["received"] >= 0.9 * info["decision"]
+    # no state was corrupted: every published state is finite and the match ended normally with a result
+    for s in states:
+        for car in s["state"]["cars"].values():
+            assert np.all(np.isfinite(car["pos"])) and np.all(np.isfinite(car["vel"]))
+        assert np.all(np.isfinite(s["state"]["ball"]["pos"]))
+    assert set(s["state"]["last_controls"]["orange_0"][0] for s in states) == {0.0}
+    assert len(ResultsStore(running.results)) == 1
+    assert running.lobby.list()[0]["status"] == "finished"
+    sub.undeclare()
+    orange.disconnect()
+
+
+def test_acting_for_another_slot_or_with_a_wrong_token_is_rejected(running, procs):
+    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 4.0}, ready_timeout_s=120)
+    states = []
+    sub = running.session.declare_subscriber(running.server.keys.state("m"),
+                                             lambda s: states.append(unpack(s.payload.to_bytes(), 1 << 24)))
+    forged = np.array([-1, 1, 1, 1, 1, 1, 1, 1], np.float32)  # pitch, yaw and roll: scripted bots never use them
+    holder = []
+
+    def answer(message):
+        blue = holder[0]
+        orange_key = blue.join.keys["act"].replace("blue_0", "orange_0")
+        blue.send(forged, message["decision"], key=orange_key)                       # own token, other slot
+        blue.send(forged, message["decision"], token="f" * 32, key=orange_key)       # made-up token
+        return NEUTRAL
+
+    procs.bot(running.endpoint, "test", "m", "orange_0")
+    holder.append(RawBot(running.session, running.lobby, "m", "blue_0", answer=answer))
+    info = running.wait_status("m", timeout_s=120)
+    blue = holder[0]
+    sent = 2 * sum(1 for m in blue.messages if not m["done"])
+    wait_for(lambda: running.lobby.inspect("m")["rejected"].get("bad_token", 0) == sent, 10, "all forgeries counted")
+    assert info["slot_status"]["orange_0"]["received"] >= 0.9 * info["decision"]
+    orange_controls = [s["state"]["last_controls"]["orange_0"] for s in states]
+    assert orange_controls and not any(c[4] == 1.0 for c in orange_controls)  # no forged roll ever applied
+    assert sent > 20
+    sub.undeclare()
+    blue.disconnect()
+
+
+@pytest.fixture(scope="module")
+def served(tmp_path_factory):
+    """One ``rocketdrl-ma serve`` subprocess for the tests that watch the server process from outside."""
+    from server_helpers import Procs
+    procs = Procs()
+    proc, endpoint = procs.serve(tmp_path_factory.mktemp("served"), name="sub")
+    session = local_client_settings([endpoint]).open()
+    yield proc, endpoint, LobbyClient(session, "sub")
+    session.close()
+    procs.kill_all()
+
+
+def test_server_listens_on_loopback_only(served):
+    proc, endpoint, _ = served
+    sockets = psutil.Process(proc.pid).net_connections(kind="inet")
+    listening = [c for c in sockets if c.status == psutil.CONN_LISTEN or c.type == 2]  # 2: SOCK_DGRAM
+    assert listening, "the server should listen somewhere"
+    assert all(c.laddr.ip in ("127.0.0.1", "::1") for c in listening), listening
+    assert any(c.laddr.port == int(endpoint.rsplit(":", 1)[1]) for c in listening)
+
+
+def test_join_leave_cycles_do_not_leak(served):
+    proc, _, lobby = served
+    server = psutil.Process(proc.pid)
+    lobby.create("matches/4v4.yaml", "churn", ready_timeout_s=3600)
+    session = lobby.session
+
+    def cycle():
+        join = lobby.join("churn")
+        token = session.liveliness().declare_token(join.keys["alive"])
+        token.undeclare()
+        lobby.leave("churn", join.token)
+
+    for _ in range(100):  # warm-up: caches, allocator pools, Zenoh's own tables
+        cycle()
+    before = (server.num_threads(), server.num_fds(), server.memory_info().rss)
+    for _ in range(1000):
+        cycle()
+    after = (server.num_threads(), server.num_fds(), server.memory_info().rss)
+    assert after[0] - before[0] <= 2, f"threads {before[0]} -> {after[0]}"
+    assert after[1] - before[1] <= 4, f"fds {before[1]} -> {after[1]}"
+    assert after[2] - before[2] <= 16 * 1024 * 1024, f"rss {before[2] >> 20} -> {after[2] >> 20} MB"
+    info = lobby.inspect("churn")
+    assert {s["occupant"] for s in info["slot_status"].values()} == {"open"} and info["status"] == "waiting"
+
+
+def test_killed_server_keeps_every_finished_match(procs, tmp_path):
+    proc, endpoint = procs.serve(tmp_path, name="k")
+    session = local_client_settings([endpoint]).open()
+    lobby = LobbyClient(session, "k")
+    for i in range(3):
+        lobby.create("matches/1v1.yaml", f"done{i}", overrides=SHORT, ready_timeout_s=0)
+    lobby.create("matches/1v1.yaml", "long", overrides={"clock_s": 300.0}, ready_timeout_s=0)
+    finished = wait_for(lambda: (lambda ms: ms if all(m["result_key"] for m in ms) else None)(
+        [m for m in lobby.list() if m["id"].startswith("done")]), 120, "three finished matches")
+    wait_for(lambda: lobby.inspect("long")["decision"] > 10, 60, "the long match to run")
+    session.close()
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait(10)
+    path = tmp_path / "results.sqlite"
+    assert sqlite3.connect(path).execute("PRAGMA integrity_check").fetchone() == ("ok",)
+    with ResultsStore(path) as store:
+        stored = {r.match_key: r for r in store.results(source="server")}
+    assert set(stored) == {m["result_key"] for m in finished}
+    assert {r.details["match_id"] for r in stored.values()} == {"done0", "done1", "done2"}
