@@ -29,6 +29,7 @@ def describe_event(event: dict, tick_rate: int = 120) -> str:
 def scoreboard(match: str, message: dict | None, recent: list[str]):
     """A rich renderable of the latest state message: score, clock, each slot's bot and counters."""
     from rich.console import Group
+    from rich.markup import escape
     from rich.table import Table
     from rich.text import Text
 
@@ -40,7 +41,7 @@ def scoreboard(match: str, message: dict | None, recent: list[str]):
     title = (f"match {match} [{message.get('status', '?')}]  blue {score.get('blue', 0)} - "
              f"{score.get('orange', 0)} orange   {int(clock // 60)}:{clock % 60:04.1f}"
              f"{' OT' if board.get('overtime') else ''}   decision {message['decision']}")
-    table = Table(title=title)
+    table = Table(title=escape(title))  # "[running]" is no markup tag
     for column in ("slot", "bot", "occupant", "connected", "received", "missed", "late", "invalid"):
         table.add_column(column)
     for slot, s in message.get("slots", {}).items():
@@ -83,6 +84,8 @@ def watch(match: str, *, server: str = "local", zenoh: ZenohSettings | None = No
         declared.append(session.declare_subscriber(keys.events(match), lambda s: events.put(s.payload.to_bytes())))
         declared.append(session.liveliness().declare_subscriber(
             keys.server_alive, lambda s: gone.append(True) if s.kind == SampleKind.DELETE else None, history=True))
+        # Subscribed from here on: a caller (or a test) knows which states the replay can hold.
+        console.print(f"watching match {match} on server {server!r} (status {info['status']})")
         latest, recent, final = None, [], None
         started = time.monotonic()
         with Live(scoreboard(match, None, recent), console=console, auto_refresh=False,
@@ -106,6 +109,8 @@ def watch(match: str, *, server: str = "local", zenoh: ZenohSettings | None = No
                     raise ServerGone(f"server {server!r} left while match {match!r} was running")
                 if timeout_s is not None and time.monotonic() - started > timeout_s:
                     raise TimeoutError(f"match {match!r} did not end within {timeout_s} s")
+        if live:
+            console.line()  # the live view leaves its cursor at the end of its last line
         while not states.empty() and writer is not None:  # states that arrived with the final message
             writer.add(decode_state(unpack(states.get(), MAX_STATE_BYTES)["state"]))
         if writer is not None:
