@@ -24,6 +24,7 @@ the Barrier and Aerial minigames' own.
 """
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 from abc import ABC, abstractmethod
@@ -399,6 +400,7 @@ class TeamRelativeObs(ObsBuilder):
         self._cached_cars: dict[str, np.ndarray] = {}
 
     @staticmethod
+    @functools.lru_cache(maxsize=None)
     def slots(blue_size: int, orange_size: int) -> tuple[int, int]:
         """(teammate slots, opponent slots) for this team size."""
         teams = [(own, other) for own, other in ((blue_size, orange_size), (orange_size, blue_size)) if own > 0]

@@ -16,7 +16,7 @@ from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BOOST, CS_DEMO_TIMER, CS_FLI
                          CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_FLIPPING,
                          CS_IS_JUMPING, CS_IS_SUPERSONIC, CS_JUMP_TIME, CS_ON_GROUND, CS_SUPERSONIC_TIME,
                          CS_WHEEL_0)
-from .state import BallState, CarControls, CarState, yaw_rot_mat
+from .state import BallState, CarControls, CarState, _trusted, yaw_rot_mat
 
 
 def _check_inside(name: str, pos: np.ndarray, margin: float) -> None:
@@ -48,9 +48,9 @@ class Car:
         b._read_state()
         k = self._k
         cs = b.cs[k]
-        return CarState(
-            pos=b.car_pos[k], vel=b.car_vel[k], ang_vel=b.car_ang_vel[k], rot_mat=b.car_rot[k],
-            boost=float(cs[CS_BOOST]), on_ground=bool(cs[CS_ON_GROUND]),
+        return _trusted(CarState, dict(
+            pos=b.car_pos[k].copy(), vel=b.car_vel[k].copy(), ang_vel=b.car_ang_vel[k].copy(),
+            rot_mat=b.car_rot[k].copy(), boost=float(cs[CS_BOOST]), on_ground=bool(cs[CS_ON_GROUND]),
             wheels_in_contact=tuple(bool(cs[CS_WHEEL_0 + w]) for w in range(4)),
             has_jumped=bool(cs[CS_HAS_JUMPED]), has_double_jumped=bool(cs[CS_HAS_DOUBLE_JUMPED]),
             has_flipped=bool(cs[CS_HAS_FLIPPED]), is_jumping=bool(cs[CS_IS_JUMPING]),
@@ -58,7 +58,7 @@ class Car:
             is_demoed=bool(cs[CS_IS_DEMOED]), handbrake_value=float(cs[CS_HANDBRAKE]),
             jump_time=float(cs[CS_JUMP_TIME]), flip_time=float(cs[CS_FLIP_TIME]),
             air_time_since_jump=float(cs[CS_AIR_TIME_SINCE_JUMP]),
-            supersonic_time=float(cs[CS_SUPERSONIC_TIME]), demo_respawn_timer=float(cs[CS_DEMO_TIMER]))
+            supersonic_time=float(cs[CS_SUPERSONIC_TIME]), demo_respawn_timer=float(cs[CS_DEMO_TIMER])))
 
     def set_state(self, state: CarState) -> None:
         if not isinstance(state, CarState):
@@ -107,7 +107,8 @@ class Ball:
         b = self._batch
         b._read_state()
         k = self._arena
-        return BallState(pos=b.ball_pos[k], vel=b.ball_vel[k], ang_vel=b.ball_ang_vel[k])
+        return _trusted(BallState, dict(pos=b.ball_pos[k].copy(), vel=b.ball_vel[k].copy(),
+                                        ang_vel=b.ball_ang_vel[k].copy()))
 
     def set_state(self, state: BallState) -> None:
         if not isinstance(state, BallState):
@@ -186,7 +187,7 @@ class Arena:
 
     def reset_kickoff(self, seed: int | None = None) -> None:
         """Standard kickoff: a random permutation of the 5 spots, car i of each team on spot i, orange mirrored."""
-        rng = np.random.default_rng(seed) if seed is not None else self._batch.rng
+        rng = np.random.default_rng(seed) if seed is not None else self._batch.arena_rngs[self.index]
         perm = rng.permutation(len(C.KICKOFF_SPOTS_BLUE))
         per_team = {0: [c for c in self._cars if c.team == 0], 1: [c for c in self._cars if c.team == 1]}
         for team, cars in per_team.items():

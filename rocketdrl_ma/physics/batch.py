@@ -123,6 +123,9 @@ class ArenaBatch:
         self.demos_enabled = True  # switches a game mode may turn off
         self.boost_pads_enabled = True
         self.rng = np.random.default_rng(seed)
+        # Each arena's own random stream (respawn spots, unseeded kickoffs); all share ``rng`` unless given their
+        # own, which makes an arena of a batch draw exactly what a lone Arena with that seed draws.
+        self.arena_rngs: list[np.random.Generator] = [self.rng] * n_arenas
         self.client = pb.connect(pb.DIRECT)
         cid = self.client
         pb.setGravity(0, 0, C.GRAVITY_Z * M_PER_UU, physicsClientId=cid)
@@ -142,6 +145,7 @@ class ArenaBatch:
         self.pad_timer = np.zeros((n_arenas, len(C.BOOST_PAD_POSITIONS)))
         self._slots: list[_CarSlot] = []
         self._slot_by_body: dict[int, _CarSlot] = {}
+        self._slot_by_id: dict[int, _CarSlot] = {}
         self._ball_arena = {b: k for k, b in enumerate(self._ball_bodies)}
         self._next_car_id = 0
         self._rebuild_car_arrays()
@@ -201,6 +205,7 @@ class ArenaBatch:
         self._read_state()
         self._slots.append(slot)
         self._slot_by_body[body] = slot
+        self._slot_by_id[slot.car_id] = slot
         old = self._snapshot_car_arrays()
         self._rebuild_car_arrays(old)
         self.cs[slot.index, CS_BOOST] = C.BOOST_SPAWN_AMOUNT
@@ -221,6 +226,7 @@ class ArenaBatch:
         pb.removeBody(slot.body, physicsClientId=self.client)
         self._slots.remove(slot)
         del self._slot_by_body[slot.body]
+        del self._slot_by_id[car_id]
         for other in self._slots:
             other.cooldown_until.pop(car_id, None)
         self._rebuild_car_arrays(old)
@@ -257,10 +263,10 @@ class ArenaBatch:
         self._state_fresh = False
 
     def _slot(self, car_id: int) -> _CarSlot:
-        for s in self._slots:
-            if s.car_id == car_id:
-                return s
-        raise ValueError(f"car: no car with id {car_id} in this batch")
+        slot = self._slot_by_id.get(car_id)
+        if slot is None:
+            raise ValueError(f"car: no car with id {car_id} in this batch")
+        return slot
 
     # ------------------------------------------------------------------ state I/O (uu <-> metres)
     def _read_state(self) -> None:
@@ -466,7 +472,7 @@ class ArenaBatch:
     def respawn(self, car_id: int) -> None:
         s = self._slot(car_id)
         k = s.index
-        x, y, yaw = C.RESPAWN_SPOTS_BLUE[int(self.rng.integers(len(C.RESPAWN_SPOTS_BLUE)))]
+        x, y, yaw = C.RESPAWN_SPOTS_BLUE[int(self.arena_rngs[s.arena].integers(len(C.RESPAWN_SPOTS_BLUE)))]
         if s.team == 1:
             x, y, yaw = -x, -y, yaw + math.pi
         cid = self.client
