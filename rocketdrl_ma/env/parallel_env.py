@@ -128,6 +128,11 @@ class RocketDRLParallelEnv(ParallelEnv):
         return observations, infos
 
     def step(self, actions: dict):
+        self.rules.advance(self._decision_controls(actions), self.tick_skip)
+        return self._end_decision()
+
+    def _decision_controls(self, actions: dict) -> dict:
+        """Validated actions parsed into each live agent's controls (shared with VectorEnv)."""
         if not self.agents:
             raise ValueError("step: the episode is over; call reset()")
         for agent in actions:
@@ -137,8 +142,10 @@ class RocketDRLParallelEnv(ParallelEnv):
         if missing:
             raise ValueError(f"actions: no action for live agent(s) {missing}")
         # Actions for agents no longer in the game are ignored (torchrl sends them for finished agents).
-        controls = {agent: self.action_parser.parse(agent, actions[agent], self._state) for agent in self.agents}
-        self.rules.advance(controls, self.tick_skip)
+        return {agent: self.action_parser.parse(agent, actions[agent], self._state) for agent in self.agents}
+
+    def _end_decision(self):
+        """Everything a step returns, once the rules have run the decision's ticks (shared with VectorEnv)."""
         self._cycles += 1
         state = self._state = self.rules.game_state()
         terminated = self.rules.is_terminated()

@@ -8,6 +8,7 @@ minigame are subclasses; a new mode needs nothing else.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 
 import numpy as np
 
@@ -64,6 +65,9 @@ class Rules(ABC):
         self._touching: set[str] = set()  # agents in contact with the ball on the last tick
         self.last_controls: dict[str, CarControls] = {}
         self._agent_by_car_id: dict[int, str] = {}
+        # Makes the arena on the first reset from a seed the episode's rng draws; None: a lone Arena(seed).
+        # A vectorised env sets it to hand out the arenas of one ArenaBatch.
+        self.arena_factory: Callable[[int], Arena] | None = None
 
     # ------------------------------------------------------------------ what a game mode defines
     def spawn_mutators(self) -> list[StateMutator]:
@@ -101,7 +105,7 @@ class Rules(ABC):
 
     # ------------------------------------------------------------------ machinery the env drives
     def build(self, seed: int | None = None) -> None:
-        self.arena = Arena(seed=seed)
+        self.arena = Arena(seed=seed) if self.arena_factory is None else self.arena_factory(seed)
         self.arena._batch.demos_enabled = self.demos
         self.arena._batch.boost_pads_enabled = self.boost_pads
         for agent in self.possible_agents:
@@ -126,23 +130,40 @@ class Rules(ABC):
         self.on_reset(rng)
 
     def advance(self, controls: dict[str, CarControls], ticks: int) -> None:
-        """Apply ``controls`` for ``ticks`` physics ticks, running the game logic after each."""
+        """Apply ``controls`` for ``ticks`` physics ticks, running the game logic after each.
+
+        A vectorised env runs the same three steps itself around one ``ArenaBatch.step`` for all arenas."""
+        self.begin_decision(controls)
+        batch = self.arena._batch
+        for _ in range(ticks):
+            self.apply_controls()
+            self.arena.step(1)
+            physics_events = list(batch.events)
+            batch.clear_events()
+            self.end_tick(physics_events)
+
+    def begin_decision(self, controls: dict[str, CarControls]) -> None:
+        """Before a decision's ticks; a subclass clears its per-decision records here."""
         self.events = []
         self.last_controls.update(controls)
-        for _ in range(ticks):
-            frozen = self.controls_frozen()
-            for agent, car in self.cars.items():
-                car.set_controls(NEUTRAL if frozen else self.last_controls[agent])
-            self.arena.step(1)
-            self._collect_physics_events()
-            self.on_tick()
 
-    def _collect_physics_events(self) -> None:
+    def apply_controls(self) -> None:
+        """Before each tick: the decision's controls, or neutral ones while the cars are frozen."""
+        frozen = self.controls_frozen()
+        for agent, car in self.cars.items():
+            car.set_controls(NEUTRAL if frozen else self.last_controls[agent])
+
+    def end_tick(self, physics_events: list[tuple]) -> None:
+        """After each tick: this arena's raw physics events (``ArenaBatch.events`` entries) become game events,
+        then the mode's per-tick logic runs."""
+        self._collect_physics_events(physics_events)
+        self.on_tick()
+
+    def _collect_physics_events(self, physics_events: list[tuple]) -> None:
         """Turn the batch's raw events into game events. A touch is the start of a contact: a car resting
         against the ball (a dribble) is in contact every tick, and that is one touch, not 120 a second."""
-        batch = self.arena._batch
         touching = set()
-        for event in batch.events:
+        for event in physics_events:
             tick, kind = event[0], event[1]
             if kind == "ball_touch":
                 agent = self._agent_by_car_id[event[2]]
@@ -161,7 +182,6 @@ class Rules(ABC):
                 self.events.append({"kind": "boost_pickup", "tick": tick, "agent": self._agent_by_car_id[event[2]],
                                     "pad": event[3]})
         self._touching = touching
-        batch.clear_events()
 
     def game_state(self) -> GameState:
         arena = self.arena

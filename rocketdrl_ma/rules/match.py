@@ -107,11 +107,11 @@ class Match(Rules):
         self._classified = len(self.events)
         self._ball_prev = ball
 
-    def advance(self, controls, ticks: int) -> None:
+    def begin_decision(self, controls) -> None:
         self.goals_this_decision = []
         self._classified = 0
         self.decisions += 1
-        super().advance(controls, ticks)
+        super().begin_decision(controls)
 
     def _goal(self, team: int) -> None:
         self.score[team] += 1

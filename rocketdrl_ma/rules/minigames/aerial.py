@@ -68,9 +68,9 @@ class Aerial(ShotMinigame):
         if self.release_after_s == 0.0:
             self.arena.ball.release()
 
-    def advance(self, controls, ticks: int) -> None:
+    def begin_decision(self, controls) -> None:
         self.aerial_touches_this_decision = []
-        super().advance(controls, ticks)
+        super().begin_decision(controls)
 
     def on_tick(self) -> None:
         if not self.ended:

@@ -171,10 +171,10 @@ class ShotMinigame(Rules):
         self.arena._batch.clear_events()
         self._begin_round()
 
-    def advance(self, controls, ticks: int) -> None:
+    def begin_decision(self, controls) -> None:
         self.outcomes_this_decision = []
         self._seen = 0
-        super().advance(controls, ticks)
+        super().begin_decision(controls)
 
     def on_tick(self) -> None:
         if self.ended:
