@@ -12,7 +12,8 @@ import argparse
 import importlib
 import sys
 
-COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.policies.commands", "rocketdrl_ma.server.commands")
+COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.policies.commands", "rocketdrl_ma.server.commands",
+                                    "rocketdrl_ma.league.commands")
 
 
 def play(config: str, blue: str, orange: str, video: str | None, seed: int, clock_s: float | None,

@@ -1,0 +1,69 @@
+"""``rocketdrl-ma league CONFIG`` and ``rocketdrl-ma league-bot`` (standard library at the top)."""
+from __future__ import annotations
+
+import argparse
+
+
+def _run_league(args: argparse.Namespace) -> int:
+    from rocketdrl_ma.results import ResultsStore
+
+    from .config import load_league_config
+    from .ratings import rate
+    from .report import write_report
+    from .runner import run_league
+    from .schedule import schedule
+
+    overrides = {"results": args.results} if args.results else {}
+    cfg = load_league_config(args.config, overrides)
+    planned = schedule(cfg)
+    if not args.report_only:
+        def show(match, result) -> None:
+            print(f"[{match.index + 1}/{len(planned)}] {match.key}: {match.blue} {result.score_blue} - "
+                  f"{result.score_orange} {match.orange} (seed {match.seed}, {result.duration_s:.0f} s)", flush=True)
+
+        run = run_league(cfg, max_matches=args.max_matches, on_result=show)
+        print(f"league {cfg.name}: {run.scheduled} scheduled, {run.already_stored} already stored, "
+              f"{run.played} played now", flush=True)
+    with ResultsStore(cfg.results) as store:
+        table = rate(cfg, planned, store.results(source="league", key_prefix=f"{cfg.name}/"))
+    for i, r in enumerate(table.ratings, 1):
+        print(f"{i:2d}. {r.name:24s} mu {r.mu:6.2f}  sigma {r.sigma:5.2f}  ordinal {r.ordinal:6.2f}  "
+              f"W-D-L {r.wins}-{r.draws}-{r.losses}")
+    print(f"report: {write_report(cfg, table, len(planned), args.config, args.report)}")
+    return 0
+
+
+def _run_league_bot(args: argparse.Namespace) -> int:
+    from rocketdrl_ma.server.bot import PolicyBot, local_client_settings
+
+    from .config import check_name
+    from .remote import serve_invitations
+
+    entrant = check_name("entrant", args.entrant)
+    session = local_client_settings(args.connect).open()
+    print(f"league bot {entrant} ({args.policy}) waiting for invitations from server {args.server!r}", flush=True)
+    try:
+        played = serve_invitations(session, args.server, entrant, lambda: PolicyBot(args.policy, name=entrant),
+                                   max_matches=args.max_matches,
+                                   on_match=lambda m, reports: print(f"played {m}", flush=True))
+    finally:
+        session.close()
+    print(f"league bot {entrant}: {played} matches played")
+    return 0
+
+
+def add_commands(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("league", help="play a league (league.yaml): ratings, payoff matrix, report")
+    p.add_argument("config", help="league YAML, e.g. league.yaml")
+    p.add_argument("--results", default=None, help="replace the config's results store (SQLite)")
+    p.add_argument("--report", default=None, help="replace the config's report folder")
+    p.add_argument("--max-matches", type=int, default=None, help="play at most this many missing matches")
+    p.add_argument("--report-only", action="store_true", help="rate the stored matches, play none")
+    p.set_defaults(run=_run_league)
+    b = sub.add_parser("league-bot", help="a remote league entrant: wait for invitations, play them on the server")
+    b.add_argument("--entrant", required=True, help="the entrant's name in the league YAML (remote: true)")
+    b.add_argument("--policy", required=True, help="a load_policy spec, e.g. checkpoint:PATH")
+    b.add_argument("--server", default="local", help="the match server's name")
+    b.add_argument("--connect", action="append", default=None, help="Zenoh endpoint of the server (client mode)")
+    b.add_argument("--max-matches", type=int, default=None, help="stop after this many matches")
+    b.set_defaults(run=_run_league_bot)

@@ -1,0 +1,118 @@
+"""Playing one scheduled match: in this process on a local env, or on a match server when a remote
+entrant takes part. Either way the outcome is one ``MatchResult`` for the league's results store."""
+from __future__ import annotations
+
+import secrets
+import threading
+import time
+
+from rocketdrl_ma.results import MatchResult
+
+from .config import LeagueConfig
+from .schedule import ScheduledMatch
+
+TEAMS = ("blue", "orange")
+ENDED = ("finished", "stopped", "failed")
+
+
+def slot_players(cfg: LeagueConfig, match: ScheduledMatch) -> dict[str, tuple[str, str | None]]:
+    """``{slot: (player name, policy spec or None for a remote bot)}`` for every car of the match."""
+    out = {}
+    for team, entrant_name in zip(TEAMS, (match.blue, match.orange)):
+        for k, player in enumerate(cfg.entrant(entrant_name).slot_players(cfg.team_size)):
+            out[f"{team}_{k}"] = (player.name, player.policy)
+    return out
+
+
+def _result(cfg: LeagueConfig, match: ScheduledMatch, score: dict, duration_s: float, details: dict) -> MatchResult:
+    players = {slot: name for slot, (name, _) in slot_players(cfg, match).items()}
+    entrants = {slot: match.blue if slot.startswith("blue") else match.orange for slot in players}
+    return MatchResult(match_key=match.key, source="league", config=cfg.game_config, entrants=entrants,
+                       score_blue=int(score["blue"]), score_orange=int(score["orange"]), duration_s=duration_s,
+                       seed=match.seed, details={"league": cfg.name, "index": match.index, "players": players,
+                                                 **details})
+
+
+def play_local(cfg: LeagueConfig, match: ScheduledMatch) -> MatchResult:
+    """A full match on a local env, every car driven by its player's policy (one instance per car)."""
+    import rocketdrl_ma
+    from rocketdrl_ma.policies.registry import load_policy
+
+    policies = {slot: load_policy(spec) for slot, (_, spec) in slot_players(cfg, match).items()}
+    env = rocketdrl_ma.parallel_env(cfg.match, **cfg.overrides)
+    try:
+        env.reset(seed=match.seed)
+        state = env.rules.game_state()
+        for policy in policies.values():
+            policy.reset(state)
+        summary: dict = {}
+        while env.agents:
+            state = env.rules.game_state()
+            actions = {a: env.action_parser.encode(policies[a].controls(a, state)) for a in env.agents}
+            _, _, _, _, infos = env.step(actions)
+            summary = next(iter(infos.values())).get("summary", summary)
+        state = env.rules.game_state()
+        return _result(cfg, match, summary["score"], state.tick / state.tick_rate,
+                       {"where": "local", "overtime": bool(summary.get("overtime", False)),
+                        "stats": summary.get("stats", {})})
+    finally:
+        env.close()
+
+
+def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session) -> MatchResult:
+    """A match on the match server: remote players are invited (``remote.invite``), the others join as
+    ``PolicyBot``s from this process; the result is read back from the lobby once the match ends."""
+    from rocketdrl_ma.server.bot import LobbyClient, PolicyBot
+
+    from .remote import invite
+
+    link = cfg.server
+    lobby = LobbyClient(session, link.name)
+    # a fresh id each attempt: a match interrupted on the server must not block its replay
+    match_id = f"{cfg.name}-{match.index}-{secrets.token_hex(3)}"
+    lobby.create(cfg.match, match_id, overrides=cfg.overrides, seed=match.seed, mode=link.mode,
+                 deadline_ms=link.deadline_ms, ready_timeout_s=2 * link.join_timeout_s, fill="idle")
+    slots = slot_players(cfg, match)
+    remote: dict[str, list[str]] = {}
+    for slot, (name, spec) in slots.items():
+        if spec is None:
+            remote.setdefault(name, []).append(slot)
+    try:
+        for name, its_slots in remote.items():
+            invite(session, link.name, name, match_id, its_slots, link.join_timeout_s)
+    except Exception:
+        lobby.stop(match_id)
+        raise
+    errors: list[BaseException] = []
+
+    def run_bot(slot: str, name: str, spec: str) -> None:
+        try:
+            PolicyBot(spec, name=name).run(match_id, slot, server=link.name, session=session)
+        except BaseException as e:  # reported by the league thread below
+            errors.append(e)
+
+    threads = [threading.Thread(target=run_bot, args=(slot, name, spec), daemon=True)
+               for slot, (name, spec) in slots.items() if spec is not None]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    info = lobby.inspect(match_id)
+    while info["status"] not in ENDED:
+        time.sleep(0.2)
+        info = lobby.inspect(match_id)
+    if errors:
+        raise RuntimeError(f"match {match.key}: a local bot failed on the server: {errors[0]!r}")
+    if info["status"] != "finished":
+        raise RuntimeError(f"match {match.key}: server match {match_id} ended {info['status']} ({info.get('error')})")
+    not_joined = [s for s, st in info["slot_status"].items() if st["occupant"] != "remote"]
+    if not_joined:
+        raise RuntimeError(f"match {match.key}: slot(s) {not_joined} never got their bot; not recorded")
+    summary = info["summary"]
+    clock_s = float(cfg.game_config["clock_s"])
+    duration_s = clock_s + summary["clock_s"] if summary["overtime"] else clock_s - summary["clock_s"]
+    missed = {s: st.get("missed", 0) + st.get("disconnected", 0) for s, st in info["slot_status"].items()}
+    return _result(cfg, match, summary["score"], duration_s,
+                   {"where": "server", "server": link.name, "server_match": match_id,
+                    "server_result": info.get("result_key"), "overtime": bool(summary["overtime"]),
+                    "stats": summary.get("stats", {}), "missed_decisions": missed})

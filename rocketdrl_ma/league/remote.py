@@ -1,0 +1,87 @@
+"""Remote entrants: a bot process waits for the league's invitations and plays them on the match server.
+
+The bot declares a queryable on ``rocketdrl/<server>/league/invite/<entrant>``; the league sends it a
+``get`` with ``{"match": id, "slots": [...]}`` right after creating the match, and the bot answers and
+joins those slots through the Bot SDK. The league retries while nobody answers (the bot may still be
+starting); no answer within the server link's ``join_timeout_s`` means the entrant is not there, and
+the league stops (the match is stopped on the server and nothing is recorded for it).
+"""
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from typing import Callable
+
+from rocketdrl_ma.server.protocol import pack, unpack
+
+log = logging.getLogger(__name__)
+INVITE_TIMEOUT_S = 10.0
+RETRY_S = 0.2  # between invitations while the entrant's bot is not there yet
+
+
+def invite_key(server: str, entrant: str) -> str:
+    return f"rocketdrl/{server}/league/invite/{entrant}"
+
+
+def invite(session, server: str, entrant: str, match_id: str, slots: list[str],
+           wait_s: float = INVITE_TIMEOUT_S) -> None:
+    """Ask ``entrant``'s bot to join ``slots`` of ``match_id``, retrying for ``wait_s`` while no bot answers
+    (it may still be starting); RuntimeError if it refuses or never answers."""
+    key = invite_key(server, entrant)
+    deadline = time.monotonic() + wait_s
+    while True:
+        for reply in session.get(key, payload=pack({"match": match_id, "slots": slots}), timeout=wait_s):
+            if reply.ok is not None and unpack(reply.ok.payload.to_bytes()).get("ok"):
+                return
+            raise RuntimeError(f"remote entrant {entrant!r}: invitation refused on {key}: "
+                               f"{reply.err.payload.to_bytes()[:200]!r}")
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"remote entrant {entrant!r}: no bot answered on {key} within {wait_s} s; start one "
+                               f"with `rocketdrl-ma league-bot --entrant {entrant} --policy SPEC --server {server}`")
+        time.sleep(RETRY_S)
+
+
+def serve_invitations(session, server: str, entrant: str, make_bot: Callable[[], object],
+                      max_matches: int | None = None, stop: threading.Event | None = None,
+                      on_match: Callable[[str, list], None] | None = None) -> int:
+    """Play every match the league invites ``entrant`` to (``make_bot()`` -> a fresh ``Bot`` per car) until
+    ``max_matches`` were played or ``stop`` is set; the number of matches played."""
+    invitations: queue.Queue = queue.Queue()
+    stop = stop or threading.Event()
+
+    def on_query(query) -> None:
+        try:
+            request = unpack(query.payload.to_bytes())
+            match_id, slots = request["match"], request["slots"]
+            if not isinstance(match_id, str) or not isinstance(slots, list) or not slots:
+                raise ValueError(f"invitation: expected a match id and a list of slots, got {request!r}")
+        except Exception as e:
+            query.reply_err(pack({"ok": False, "error": str(e)}))
+            return
+        invitations.put((match_id, slots))
+        query.reply(query.key_expr, pack({"ok": True}))
+
+    queryable = session.declare_queryable(invite_key(server, entrant), on_query)
+    played = 0
+    try:
+        while not stop.is_set() and (max_matches is None or played < max_matches):
+            try:
+                match_id, slots = invitations.get(timeout=0.5)
+            except queue.Empty:
+                continue
+            reports: list = []
+            threads = [threading.Thread(target=lambda s=slot: reports.append(
+                make_bot().run(match_id, s, server=server, session=session)), daemon=True) for slot in slots]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+            played += 1
+            log.info("played %s as %s", match_id, slots)
+            if on_match is not None:
+                on_match(match_id, reports)
+    finally:
+        queryable.undeclare()
+    return played
