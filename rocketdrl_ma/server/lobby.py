@@ -13,7 +13,7 @@ from typing import Any
 
 from rocketdrl_ma.results import MatchResult, ResultsStore
 
-from .match import MatchRunner
+from .match import ENDED, MatchRunner
 from .protocol import MAX_REQUEST_BYTES, Keys, ProtocolError, check_name, pack, unpack
 from .settings import MatchOptions, ServerSettings
 from .slots import same_token
@@ -98,7 +98,7 @@ class MatchServer:
 
     def _forget_old(self) -> None:
         """Keep at most ``max_finished_kept`` ended matches in memory (their results are in the store)."""
-        ended = [m for m in self.matches.values() if m.status in ("finished", "stopped", "failed")]
+        ended = [m for m in self.matches.values() if m.status in ENDED]
         for match in ended[:max(0, len(ended) - self.settings.max_finished_kept + 1)]:
             del self.matches[match.id]
 

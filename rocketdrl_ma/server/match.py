@@ -8,7 +8,6 @@ env unchecked. The match thread only waits, up to the deadline, for the actions 
 from __future__ import annotations
 
 import logging
-import math
 import threading
 import time
 import traceback
@@ -32,8 +31,7 @@ from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations, same_to
 
 log = logging.getLogger(__name__)
 REALTIME_TICK_HZ = 120.0
-STATUSES = ("waiting", "running", "finished", "stopped", "failed")
-_CONTROL_FIELDS = ("throttle", "steer", "pitch", "yaw", "roll", "jump", "boost", "handbrake")
+ENDED = ("finished", "stopped", "failed")  # a match is waiting, then running, then one of these
 
 
 def _spec(value: Any, field: str) -> dict:

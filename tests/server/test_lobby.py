@@ -9,7 +9,7 @@ import msgpack
 import numpy as np
 import pytest
 from gymnasium import spaces
-from server_helpers import SHORT, RawBot, wait_for
+from server_helpers import SHORT, RawBot
 
 from rocketdrl_ma.env.actions import SeedActions
 from rocketdrl_ma.policies.scripted import make_scripted
@@ -84,6 +84,22 @@ def test_admin_token_guards_create_and_stop(tmp_path):
         with pytest.raises(ServerError, match="admin token"):
             r.lobby.stop("m", admin_token="guess")
         assert r.lobby.list()[0]["id"] == "m"  # reading needs no token
+    finally:
+        r.close()
+
+
+def test_ended_matches_are_forgotten_beyond_the_bound(tmp_path):
+    from server_helpers import Running
+    r = Running(tmp_path, max_finished_kept=2)
+    try:
+        for i in range(4):
+            r.lobby.create("matches/1v1.yaml", f"s{i}", ready_timeout_s=60)
+            r.lobby.stop(f"s{i}")
+            r.wait_status(f"s{i}", ("stopped",))
+        r.lobby.create("matches/1v1.yaml", "new", ready_timeout_s=60)
+        assert {m["id"] for m in r.lobby.list()} == {"s3", "new"}  # at most 2 kept, the new one included
+        with pytest.raises(ServerError, match="no match 's0'"):
+            r.lobby.inspect("s0")
     finally:
         r.close()
 
