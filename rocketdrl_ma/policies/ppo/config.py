@@ -21,6 +21,7 @@ their mean at the idle car's controls (no jump, boost or drift), so early explor
 hops. ``curriculum`` (as ML-Agents' lessons, over a minigame's ``difficulty``): start at ``start``, and
 each time the last 100 training episodes succeed at least ``threshold`` of the time, raise the
 difficulty by ``step`` up to 1; empty: train at the env config's difficulty throughout.
+``selfplay``: train one team against an opponent pool (``policies/selfplay/config.py``); empty: none.
 """
 from __future__ import annotations
 
@@ -30,6 +31,8 @@ from typing import Any
 import yaml
 
 from rocketdrl_ma.config import load_config, resolve_config_path
+
+from rocketdrl_ma.policies.selfplay.config import check_selfplay
 
 from .shaping import check_shaping
 
@@ -61,6 +64,7 @@ TRAIN_DEFAULTS: dict[str, Any] = {
     "shaping": {},
     "init_std": 1.0,
     "curriculum": {},
+    "selfplay": {},
 }
 CURRICULUM_KEYS = {"start": 0.0, "step": 0.1, "threshold": 0.8}
 SCHEDULES = ("linear", "constant")
@@ -114,6 +118,9 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"batch_size: must be <= buffer_size ({cfg['buffer_size']}), got {cfg['batch_size']}")
     cfg["shaping"] = check_shaping(cfg["shaping"])
     cfg["curriculum"] = _check_curriculum(cfg["curriculum"])
+    cfg["selfplay"] = check_selfplay(cfg["selfplay"])
+    if cfg["selfplay"] and cfg["curriculum"]:
+        raise ValueError("selfplay: a curriculum needs a minigame's difficulty; self-play trains on a match")
     # The env config is validated now, so a typo there fails before any training starts.
     load_config(cfg["env"], cfg["env_overrides"])
     return cfg

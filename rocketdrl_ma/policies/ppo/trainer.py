@@ -76,6 +76,15 @@ def checkpoint_meta(cfg: dict[str, Any], model: PPOModel, obs_dim: int, agent_st
             "difficulty": difficulty}
 
 
+def make_pool(cfg: dict[str, Any], run_dir: Path):
+    """The env copies the trainer collects from: every agent is the learner, or with a ``selfplay``
+    section, the learner's team against an opponent pool (``policies/selfplay/pool.py``)."""
+    if cfg["selfplay"]:
+        from rocketdrl_ma.policies.selfplay.pool import SelfPlayPool
+        return SelfPlayPool(cfg, run_dir)
+    return EnvPool(cfg["env"], cfg["n_envs"], cfg["seed"], cfg["env_overrides"], cfg["shaping"])
+
+
 def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str | Path | None = None,
           progress: bool = True) -> TrainResult:
     """Train until ``cfg["max_steps"]`` agent steps; write the final checkpoint to ``out``."""
@@ -83,7 +92,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     torch.manual_seed(cfg["seed"])
     device = pick_device(cfg["device"])
     run_dir = Path(run_dir)
-    pool = EnvPool(cfg["env"], cfg["n_envs"], cfg["seed"], cfg["env_overrides"], cfg["shaping"])
+    pool = make_pool(cfg, run_dir)
     obs_dim = pool.observation_space.shape[0]
     action = action_spec(pool.action_space)
     idle = pool.envs[0].action_parser.encode(CarControls()) if action["kind"] == "box" else None
@@ -101,6 +110,8 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             optimizer.load_state_dict(torch.load(sidecar(path, ".optim.pt"), map_location=device, weights_only=True))
         agent_steps = int(meta["agent_steps"])
         difficulty = meta.get("difficulty", difficulty)
+    if hasattr(pool, "attach"):  # the self-play pool: the learner is also an opponent, snapshots join the pool
+        pool.attach(model, agent_steps)
 
     loss_module = make_loss(model, cfg)
     actor = model.td_modules()[0]  # the same parameters the loss trains
@@ -175,6 +186,8 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
         # ---- num_epoch passes of minibatch updates
         model.train()
         losses = ppo_update(model, loss_module, optimizer, batch, cfg["num_epoch"], cfg["batch_size"])[-1]
+        if hasattr(pool, "on_update"):
+            pool.on_update(model, agent_steps, writer)
 
         # ---- progress, summaries, checkpoints
         elapsed = time.monotonic() - start_time

@@ -1,0 +1,52 @@
+"""The ``selfplay:`` section of a training YAML (empty: ordinary PPO, every agent the learner).
+
+- ``snapshot_interval``: agent steps between snapshots of the learner; each becomes a playable
+  checkpoint (``RUN_DIR/snapshots/step_N.pt``) and an opponent in the pool.
+- ``pool_size``: how many of the most recent snapshots stay in the pool.
+- ``scripted``: scripted bots that are always in the pool (``ball_chaser``, ``goalie``, ``idle``).
+- ``self_play``: share of episodes against the current policy itself (not through PFSP).
+- ``weighting``, ``p``, ``window``: prioritised fictitious self-play over the pool (``pfsp.py``).
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from .pfsp import WEIGHTINGS
+
+SELFPLAY_DEFAULTS: dict[str, Any] = {"snapshot_interval": 200_000, "pool_size": 10, "scripted": ["ball_chaser"],
+                                     "self_play": 0.2, "weighting": "hard", "p": 2.0, "window": 50}
+
+
+def check_selfplay(section: object) -> dict[str, Any]:
+    """Defaults filled in, every value checked; ValueError names the key and the allowed values."""
+    from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
+
+    if not isinstance(section, dict):
+        raise ValueError(f"selfplay: expected a mapping with {sorted(SELFPLAY_DEFAULTS)}, got {section!r}")
+    if not section:
+        return {}
+    unknown = sorted(set(section) - set(SELFPLAY_DEFAULTS))
+    if unknown:
+        raise ValueError(f"selfplay: unknown key(s) {unknown}; allowed: {sorted(SELFPLAY_DEFAULTS)}")
+    out = {**SELFPLAY_DEFAULTS, **section}
+    for key in ("snapshot_interval", "pool_size", "window"):
+        value = out[key]
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"selfplay.{key}: expected an int >= 1, got {value!r}")
+    for key in ("self_play", "p"):
+        value = out[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"selfplay.{key}: expected a number, got {value!r}")
+        out[key] = float(value)
+    if not 0.0 <= out["self_play"] <= 1.0:
+        raise ValueError(f"selfplay.self_play: must be in [0, 1], got {out['self_play']}")
+    if out["p"] <= 0.0:
+        raise ValueError(f"selfplay.p: must be > 0, got {out['p']}")
+    if out["weighting"] not in WEIGHTINGS:
+        raise ValueError(f"selfplay.weighting: {out['weighting']!r} is not one of {list(WEIGHTINGS)}")
+    bots = out["scripted"]
+    if not isinstance(bots, list) or any(b not in SCRIPTED_BOTS for b in bots):
+        raise ValueError(f"selfplay.scripted: expected a list of scripted bots from {sorted(SCRIPTED_BOTS)}, "
+                         f"got {bots!r}")
+    out["scripted"] = list(bots)
+    return out

@@ -1,0 +1,118 @@
+"""Self-play: the selfplay config section, PFSP weighting, snapshots entering the pool, and a short
+real training run through ``rocketdrl-ma train`` with a self-play YAML."""
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from rocketdrl_ma.cli import main
+from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
+from rocketdrl_ma.policies.ppo.model import PPOModel, action_spec
+from rocketdrl_ma.policies.registry import load_policy
+from rocketdrl_ma.policies.selfplay.pfsp import PFSP
+from rocketdrl_ma.policies.selfplay.pool import SELF, SelfPlayPool
+
+# policies/selfplay_1v1.yaml cut down: 3 s matches (so episodes end and PFSP gets results), a tiny network
+TINY = {"env_overrides": {"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 1.0},
+        "n_envs": 2, "buffer_size": 256, "batch_size": 128, "num_epoch": 1, "hidden_units": 32,
+        "max_steps": 1024, "summary_freq": 512, "checkpoint_interval": 1024, "keep_checkpoints": 1,
+        "selfplay": {"snapshot_interval": 256, "pool_size": 2, "scripted": ["ball_chaser"], "self_play": 0.2,
+                     "window": 20}}
+
+
+def test_selfplay_section_is_validated():
+    base = load_train_config("policies/selfplay_1v1.yaml")
+    assert base["selfplay"]["scripted"] == ["ball_chaser", "goalie"]
+    raw = {k: v for k, v in base.items()}
+    with pytest.raises(ValueError, match=r"selfplay: unknown key\(s\) \['poolsize'\]"):
+        validate_train_config({**raw, "selfplay": {"poolsize": 3}})
+    with pytest.raises(ValueError, match="selfplay.scripted"):
+        validate_train_config({**raw, "selfplay": {"scripted": ["striker"]}})
+    with pytest.raises(ValueError, match="selfplay.weighting"):
+        validate_train_config({**raw, "selfplay": {"weighting": "easy"}})
+    with pytest.raises(ValueError, match="selfplay.self_play"):
+        validate_train_config({**raw, "selfplay": {"self_play": 1.5}})
+    with pytest.raises(ValueError, match="selfplay: needs a match"):
+        SelfPlayPool(validate_train_config({**raw, "env": "minigames/penalty.yaml", "env_overrides": {}}), "unused")
+
+
+def test_pfsp_picks_the_opponents_it_loses_to_more_often():
+    pfsp = PFSP("hard", p=2.0, window=50)
+    for name in ("beats_us", "even", "we_beat"):
+        pfsp.add_opponent(name)
+    for _ in range(30):
+        pfsp.record("beats_us", 0.0)
+        pfsp.record("even", 0.5)
+        pfsp.record("we_beat", 1.0)
+    weights = pfsp.weights()
+    assert weights["beats_us"] > weights["even"] > weights["we_beat"]
+    rng = np.random.default_rng(0)
+    picks = [pfsp.sample(rng) for _ in range(2000)]
+    counts = {n: picks.count(n) for n in weights}
+    assert counts["beats_us"] > 2 * counts["even"] > 2 * counts["we_beat"]
+    assert abs(counts["beats_us"] / 2000 - weights["beats_us"]) < 0.05
+    # an opponent not played yet counts as even; the variance weighting favours even opponents
+    pfsp.add_opponent("new")
+    assert pfsp.win_rate("new") == 0.5
+    var = PFSP("variance")
+    for name, result in (("even", 0.5), ("we_beat", 1.0)):
+        var.add_opponent(name)
+        for _ in range(30):
+            var.record(name, result)
+    assert var.weights()["even"] > var.weights()["we_beat"]
+
+
+def _pool(tmp_path) -> tuple[SelfPlayPool, PPOModel, dict]:
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY})
+    pool = SelfPlayPool(cfg, tmp_path)
+    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 32, 2, True)
+    return pool, model, cfg
+
+
+def test_snapshots_enter_the_pool_and_the_learner_plays_both_sides(tmp_path):
+    pool, model, cfg = _pool(tmp_path)
+    pool.attach(model, 0)
+    assert set(pool.opponents) == {"scripted:ball_chaser"}
+    for steps in (256, 512, 768):
+        with torch.no_grad():  # a different learner each time, so snapshots differ
+            model.value[0].bias.add_(1.0)
+        path = pool.snapshot(model, steps)
+        assert load_policy(f"checkpoint:{path}").model.value[0].bias[0] == model.value[0].bias[0]
+    # pool_size 2: the oldest snapshot left the pool (its file stays, a checkpoint for leagues)
+    assert set(pool.opponents) == {"scripted:ball_chaser", "snapshot:512", "snapshot:768"}
+    assert len(pool.snapshots()) == 3
+    assert "snapshot:256" not in pool.pfsp.results
+
+    obs = pool.reset()
+    assert obs.shape == (cfg["n_envs"], pool.observation_space.shape[0])  # rows: the learner's cars only
+    sides, opponents = set(), set()
+    for _ in range(150):  # 3 s matches: several episodes per copy
+        step = pool.step(np.zeros((pool.n_rows, pool.action_space.shape[0]), np.float32))
+        sides.update(pool._learner_team)
+        opponents.update(pool._opponent)
+    assert sides == {"blue", "orange"}
+    assert sum(pool.picks.values()) > cfg["n_envs"]
+    assert opponents - {SELF} and opponents <= set(pool.opponents) | {SELF}
+    assert sum(len(r) for r in pool.pfsp.results.values()) > 0  # results recorded for PFSP
+    pool.close()
+
+    # a resumed run finds the newest snapshots again
+    again, model2, _ = _pool(tmp_path)
+    again.attach(model2, 800)
+    assert {"snapshot:512", "snapshot:768"} <= set(again.opponents) and again.next_snapshot == 1024
+    again.close()
+
+
+@pytest.mark.slow
+def test_short_selfplay_run_end_to_end(tmp_path):
+    cfg_path = tmp_path / "sp.yaml"
+    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml"), **TINY}))
+    run_dir = tmp_path / "run"
+    assert main(["train", str(cfg_path), "--run-dir", str(run_dir), "--quiet"]) == 0
+    snaps = sorted(p.name for p in (run_dir / "snapshots").glob("step_*[0-9].pt"))
+    assert snaps == ["step_1024.pt", "step_256.pt", "step_512.pt", "step_768.pt"]
+    meta = json.loads((run_dir / "final.json").read_text())
+    assert meta["agent_steps"] == 1024 and meta["train"]["selfplay"]["pool_size"] == 2
+    policy = load_policy(f"checkpoint:{run_dir / 'final.pt'}")
+    assert policy.meta["env"]["resolved"]["observation"]["name"] == "team_relative"
