@@ -273,24 +273,22 @@ class ArenaBatch:
         if self._state_fresh:
             return
         cid = self.client
-        for k, body in enumerate(self._ball_bodies):
-            pos, _ = pb.getBasePositionAndOrientation(body, physicsClientId=cid)
-            lin, ang = pb.getBaseVelocity(body, physicsClientId=cid)
-            self.ball_pos[k] = pos
-            self.ball_vel[k] = lin
-            self.ball_ang_vel[k] = ang
+        # One array assignment per quantity: filling rows one by one cost more than the PyBullet calls.
+        poses = [pb.getBasePositionAndOrientation(body, physicsClientId=cid) for body in self._ball_bodies]
+        vels = [pb.getBaseVelocity(body, physicsClientId=cid) for body in self._ball_bodies]
+        self.ball_pos[:] = [pose[0] for pose in poses]
+        self.ball_vel[:] = [vel[0] for vel in vels]
+        self.ball_ang_vel[:] = [vel[1] for vel in vels]
         self.ball_pos *= C.UU_PER_M
         self.ball_pos -= self.origins
         self.ball_vel *= C.UU_PER_M
-        for s in self._slots:
-            pos, quat = pb.getBasePositionAndOrientation(s.body, physicsClientId=cid)
-            lin, ang = pb.getBaseVelocity(s.body, physicsClientId=cid)
-            k = s.index
-            self.car_pos[k] = pos
-            self.car_quat[k] = quat
-            self.car_vel[k] = lin
-            self.car_ang_vel[k] = ang
-        if self._slots:
+        if self._slots:  # slot k holds index k (see _rebuild_car_arrays)
+            poses = [pb.getBasePositionAndOrientation(s.body, physicsClientId=cid) for s in self._slots]
+            vels = [pb.getBaseVelocity(s.body, physicsClientId=cid) for s in self._slots]
+            self.car_pos[:] = [pose[0] for pose in poses]
+            self.car_quat[:] = [pose[1] for pose in poses]
+            self.car_vel[:] = [vel[0] for vel in vels]
+            self.car_ang_vel[:] = [vel[1] for vel in vels]
             self.car_pos *= C.UU_PER_M
             self.car_pos -= self.origins[self.car_arena]
             self.car_vel *= C.UU_PER_M

@@ -19,6 +19,7 @@ from .mutators import KickoffMutator, StateMutator
 from .state import GameState, Obstacle, agent_names, agent_team
 
 NEUTRAL = CarControls()
+_NEUTRAL_ROW = NEUTRAL.as_array()
 GOAL_LINE_Y = C.ARENA_EXTENT_Y
 
 
@@ -65,6 +66,7 @@ class Rules(ABC):
         self._touching: set[str] = set()  # agents in contact with the ball on the last tick
         self.last_controls: dict[str, CarControls] = {}
         self._agent_by_car_id: dict[int, str] = {}
+        self._control_rows: dict[str, np.ndarray] = {}
         # Makes the arena on the first reset from a seed the episode's rng draws; None: a lone Arena(seed).
         # A vectorised env sets it to hand out the arenas of one ArenaBatch.
         self.arena_factory: Callable[[int], Arena] | None = None
@@ -146,12 +148,17 @@ class Rules(ABC):
         """Before a decision's ticks; a subclass clears its per-decision records here."""
         self.events = []
         self.last_controls.update(controls)
+        self._control_rows = {agent: c.as_array() for agent, c in self.last_controls.items()}
 
     def apply_controls(self) -> None:
         """Before each tick: the decision's controls, or neutral ones while the cars are frozen."""
+        rows = self._control_rows
         frozen = self.controls_frozen()
+        batch_controls = self.arena._batch.controls
         for agent, car in self.cars.items():
-            car.set_controls(NEUTRAL if frozen else self.last_controls[agent])
+            # The rows of validated CarControls, written straight into the batch (Car.set_controls per tick
+            # rebuilt and re-checked them 8 times per decision).
+            batch_controls[car._k] = _NEUTRAL_ROW if frozen else rows[agent]
 
     def end_tick(self, physics_events: list[tuple]) -> None:
         """After each tick: this arena's raw physics events (``ArenaBatch.events`` entries) become game events,

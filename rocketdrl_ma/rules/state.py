@@ -1,6 +1,7 @@
 """What a decision sees: one read-only snapshot of the game, shared by observations, rewards and rules."""
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -11,6 +12,7 @@ BLUE, ORANGE = 0, 1
 TEAM_NAMES = ("blue", "orange")
 
 
+@functools.lru_cache(maxsize=256)  # observations ask it for every car of every agent's view each decision
 def agent_team(agent: str) -> int:
     """``blue_0`` -> 0, ``orange_3`` -> 1 (PettingZoo's ``word_N`` names)."""
     prefix = agent.rsplit("_", 1)[0]
