@@ -1,5 +1,8 @@
 """Many env copies as one batch of rows for the trainer: every agent of every copy is a row.
 
+The copies are the arenas of one ``VectorEnv`` (one PyBullet world stepped once per tick for all of them); each is
+the PettingZoo env's own game, copy ``i`` seeded with ``seed + i``.
+
 All agents share one policy (for a match that is self-play against itself). A copy that ends is reset
 at once; ``step`` reports the finished episodes (return, length, success) and, for rows cut off by a
 time limit, their final observation so the trainer can bootstrap from it. With ``shaping`` weights the
@@ -13,6 +16,7 @@ import numpy as np
 from gymnasium import spaces
 
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+from rocketdrl_ma.env.vector_env import VectorEnv
 
 from .shaping import potential
 
@@ -48,12 +52,13 @@ class StepResult:
 
 
 class EnvPool:
-    """``n_envs`` PettingZoo envs stepped one after another in this process."""
+    """``n_envs`` copies of a PettingZoo env, stepped together as the arenas of one ``VectorEnv``."""
 
     def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None,
                  shaping: dict[str, float] | None = None):
         overrides = {**(overrides or {}), "info_format": "full"}
-        self.envs = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_envs)]
+        self.vec = VectorEnv(config, n_arenas=n_envs, autoreset=False, **overrides)
+        self.envs: list[RocketDRLParallelEnv] = self.vec.lanes
         first = self.envs[0]
         self.agents = list(first.possible_agents)
         self.n_rows = n_envs * len(self.agents)
@@ -69,45 +74,45 @@ class EnvPool:
         return slice(i * len(self.agents), (i + 1) * len(self.agents))
 
     def reset(self) -> np.ndarray:
-        obs = np.zeros((self.n_rows, self.observation_space.shape[0]), np.float32)
+        obs, _ = self.vec.reset(seed=self.seed)
         for i, env in enumerate(self.envs):
-            o, _ = env.reset(seed=self.seed + i)
-            obs[self._rows(i)] = [o[a] for a in self.agents]
             self._phi[self._rows(i)] = self._potentials(env)
         self._returns[:] = 0.0
         self._lengths[:] = 0
-        return obs
+        return obs.reshape(self.n_rows, -1)
 
     def step(self, actions: np.ndarray) -> StepResult:
-        dim = self.observation_space.shape[0]
-        obs = np.zeros((self.n_rows, dim), np.float32)
+        n_agents = len(self.agents)
+        actions = np.asarray(actions)
+        obs, reward, term, trunc, infos = self.vec.step(
+            actions.reshape((len(self.envs), n_agents) + actions.shape[1:]))
+        obs = obs.reshape(self.n_rows, -1)
+        reward = reward.reshape(-1)
+        terminated = np.repeat(term, n_agents)  # every agent of a copy ends together
+        truncated = np.repeat(trunc & ~term, n_agents)
         final_obs = np.zeros_like(obs)
-        reward = np.zeros(self.n_rows, np.float32)
-        terminated = np.zeros(self.n_rows, bool)
-        truncated = np.zeros(self.n_rows, bool)
         shaping = np.zeros(self.n_rows, np.float32)
-        episodes: list[Episode] = []
-        for i, env in enumerate(self.envs):
-            rows = self._rows(i)
-            acts = {a: actions[rows][k] for k, a in enumerate(self.agents)}
-            o, r, term, trunc, infos = env.step(acts)
-            obs[rows] = [o[a] for a in self.agents]
-            reward[rows] = [r[a] for a in self.agents]
-            terminated[rows] = [term[a] for a in self.agents]
-            truncated[rows] = [trunc[a] and not term[a] for a in self.agents]
-            if self.shaping:
+        if self.shaping:
+            for i, env in enumerate(self.envs):
+                rows = self._rows(i)
                 phi = np.asarray(self._potentials(env))
                 shaping[rows] = phi - self._phi[rows]
                 self._phi[rows] = phi
-            if not env.agents:  # every agent of a copy ends together
-                final_obs[rows] = obs[rows]
-                for k, agent in enumerate(self.agents):
-                    row = rows.start + k
-                    episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
-                                            episode_success(agent, infos[agent])))
-                o, _ = env.reset()
-                obs[rows] = [o[a] for a in self.agents]
-                self._phi[rows] = self._potentials(env)
+        episodes: list[Episode] = []
+        ended = term | trunc
+        for i in np.flatnonzero(ended):
+            rows = self._rows(int(i))
+            final_obs[rows] = obs[rows]
+            for k, agent in enumerate(self.agents):
+                row = rows.start + k
+                episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
+                                        episode_success(agent, infos[i][agent])))
+        if ended.any():
+            new_obs, _ = self.vec.reset_arenas(ended)
+            for i in np.flatnonzero(ended):
+                rows = self._rows(int(i))
+                obs[rows] = new_obs[i]
+                self._phi[rows] = self._potentials(self.envs[int(i)])
         done = terminated | truncated
         self._returns = np.where(done, 0.0, self._returns + reward)
         self._lengths = np.where(done, 0, self._lengths + 1)
@@ -127,5 +132,4 @@ class EnvPool:
             env.rules.set_difficulty(difficulty)
 
     def close(self) -> None:
-        for env in self.envs:
-            env.close()
+        self.vec.close()
