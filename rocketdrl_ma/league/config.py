@@ -7,7 +7,7 @@ overrides: {clock_s: 300.0}    # its keys to replace
 format: round_robin            # every pair once per round (sides alternate by round), or: per_pair
 rounds: 2                      # round_robin: how many rounds
 matches_per_pair: 4            # per_pair: matches between every pair (sides alternate)
-seed: 0                        # match seeds are seed + the match's index in the schedule
+seed: 0                        # match seeds: seed + a hash of the match key (stable when entrants join)
 results: runs/league/results.sqlite
 report: results/league         # report.md + ratings.png
 server: {name: local, connect: [tcp/127.0.0.1:7447]}   # only for remote entrants

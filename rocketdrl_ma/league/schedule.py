@@ -6,6 +6,7 @@ stopped, and the store's unique keys make a finished match impossible to record 
 """
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 from itertools import combinations
 
@@ -21,6 +22,12 @@ class ScheduledMatch:
     seed: int
 
 
+def match_seed(seed: int, key: str) -> int:
+    """The env seed of a match: from its key, so adding entrants to a league keeps every seed (and the
+    stored results stay those of the schedule)."""
+    return (seed + zlib.crc32(key.encode())) % 2**31
+
+
 def schedule(cfg: LeagueConfig) -> list[ScheduledMatch]:
     """Round robin: every pair once per round, sides swapping each round; per pair: ``matches_per_pair``
     games of every pair, sides alternating."""
@@ -32,5 +39,5 @@ def schedule(cfg: LeagueConfig) -> list[ScheduledMatch]:
         games = [(0, g, a, b) if g % 2 == 0 else (0, g, b, a) for a, b in pairs for g in range(cfg.matches_per_pair)]
     for index, (rnd, game, blue, orange) in enumerate(games):
         key = f"{cfg.name}/{rnd}/{blue}-vs-{orange}/{game}"
-        out.append(ScheduledMatch(index, key, blue, orange, cfg.seed + index))
+        out.append(ScheduledMatch(index, key, blue, orange, match_seed(cfg.seed, key)))
     return out

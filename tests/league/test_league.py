@@ -52,7 +52,11 @@ def test_schedule_is_deterministic_with_unique_keys(tmp_path):
     planned = schedule(cfg)
     assert planned == schedule(cfg)
     assert len(planned) == 9 and len({m.key for m in planned}) == 9
-    assert [m.seed for m in planned] == list(range(9))
+    assert len({m.seed for m in planned}) == 9
+    # adding an entrant keeps the keys and seeds of the matches already scheduled
+    more = validate_league_config({**league(tmp_path, "s", 5.0), "format": "round_robin", "rounds": 3, "entrants": [
+        {"name": n, "policy": "scripted:idle"} for n in ("a", "b", "c", "d")]})
+    assert {(m.key, m.seed) for m in planned} < {(m.key, m.seed) for m in schedule(more)}
     # sides swap from one round to the next
     assert (planned[0].blue, planned[0].orange) == (planned[3].orange, planned[3].blue)
 
