@@ -10,6 +10,7 @@ from rocketdrl_ma.cli import main
 from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
 from rocketdrl_ma.policies.ppo.model import PPOModel, action_spec
 from rocketdrl_ma.policies.registry import load_policy
+from rocketdrl_ma.policies.selfplay.imitation import collect
 from rocketdrl_ma.policies.selfplay.pfsp import PFSP
 from rocketdrl_ma.policies.selfplay.pool import SELF, SelfPlayPool
 
@@ -116,3 +117,20 @@ def test_short_selfplay_run_end_to_end(tmp_path):
     assert meta["agent_steps"] == 1024 and meta["train"]["selfplay"]["pool_size"] == 2
     policy = load_policy(f"checkpoint:{run_dir / 'final.pt'}")
     assert policy.meta["env"]["resolved"]["observation"]["name"] == "team_relative"
+
+
+def test_imitation_warm_start_clones_the_bot(tmp_path):
+    with pytest.raises(ValueError, match="selfplay.imitate.bot"):
+        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), "selfplay": {"imitate": {"bot": "x"}}})
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
+                                 "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 300, "epochs": 15}}})
+    pool = SelfPlayPool(cfg, tmp_path)
+    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 64, 2, True)
+    obs, actions = collect(cfg["env"], cfg["env_overrides"], "ball_chaser", "ball_chaser", 100, seed=5)
+    assert obs.shape == (200, pool.observation_space.shape[0]) and actions.shape == (200, 8)  # both cars
+    error_before = np.mean((model.act_deterministic(obs) - actions) ** 2)
+    pool.attach(model, 0)  # a fresh run: the warm start runs here
+    losses = pool.imitation_losses
+    assert len(losses) == 15 and losses[-1] < 0.5 * losses[0]
+    assert np.mean((model.act_deterministic(obs) - actions) ** 2) < 0.5 * error_before  # on other matches too
+    pool.close()

@@ -6,15 +6,19 @@
 - ``scripted``: scripted bots that are always in the pool (``ball_chaser``, ``goalie``, ``idle``).
 - ``self_play``: share of episodes against the current policy itself (not through PFSP).
 - ``weighting``, ``p``, ``window``: prioritised fictitious self-play over the pool (``pfsp.py``).
+- ``imitate``: ``{bot, opponent, decisions, epochs}``: clone a scripted bot before the first update
+  (``imitation.py``); empty: start from scratch.
 """
 from __future__ import annotations
 
 from typing import Any
 
+from .imitation import check_imitate
 from .pfsp import WEIGHTINGS
 
 SELFPLAY_DEFAULTS: dict[str, Any] = {"snapshot_interval": 200_000, "pool_size": 10, "scripted": ["ball_chaser"],
-                                     "self_play": 0.2, "weighting": "hard", "p": 2.0, "window": 50}
+                                     "self_play": 0.2, "weighting": "hard", "p": 2.0, "window": 50,
+                                     "imitate": {}}
 
 
 def check_selfplay(section: object) -> dict[str, Any]:
@@ -49,4 +53,5 @@ def check_selfplay(section: object) -> dict[str, Any]:
         raise ValueError(f"selfplay.scripted: expected a list of scripted bots from {sorted(SCRIPTED_BOTS)}, "
                          f"got {bots!r}")
     out["scripted"] = list(bots)
+    out["imitate"] = check_imitate(out["imitate"])
     return out

@@ -59,6 +59,7 @@ class SelfPlayPool:
         for bot in self.sp["scripted"]:
             self._add(f"scripted:{bot}", make_scripted(bot))
         self.learner: PPOModel | None = None
+        self.imitation_losses: list[float] = []
         self.next_snapshot = self.sp["snapshot_interval"]
         self.picks: dict[str, int] = {}
         self._learner_team = ["blue"] * len(self.envs)
@@ -72,8 +73,12 @@ class SelfPlayPool:
 
     # ------------------------------------------------------------------ trainer hooks
     def attach(self, model: PPOModel, agent_steps: int) -> None:
-        """The learner (also the ``self`` opponent); reloads the newest snapshots of a resumed run."""
+        """The learner (also the ``self`` opponent); reloads the newest snapshots of a resumed run, or
+        clones the ``imitate`` bot into a fresh learner."""
         self.learner = model
+        if agent_steps == 0 and self.sp["imitate"]:  # a fresh run: start from the cloned bot
+            from .imitation import warm_start
+            self.imitation_losses = warm_start(model, self.cfg)
         interval = self.sp["snapshot_interval"]
         self.next_snapshot = (agent_steps // interval + 1) * interval
         for path in self.snapshots()[-self.sp["pool_size"]:]:
