@@ -398,6 +398,8 @@ class TeamRelativeObs(ObsBuilder):
         self._spaces: dict[tuple[int, int], spaces.Box] = {}
         self._cached_state: GameState | None = None  # the last state seen, held so its id cannot be reused
         self._cached_cars: dict[str, np.ndarray] = {}
+        self._cached_sizes: tuple[int, int] | None = None
+        self._cached_frames: dict[int, tuple] = {}
 
     @staticmethod
     @functools.lru_cache(maxsize=None)
@@ -439,36 +441,43 @@ class TeamRelativeObs(ObsBuilder):
         index = int(agent.rsplit("_", 1)[1])
         if not 0 <= index < own_size:
             raise ValueError(f"agent: {agent!r} is not in a {blue_size}v{orange_size} game")
-        for name in state.cars:
-            t, i = agent_team(name), int(name.rsplit("_", 1)[1])
-            if i >= (blue_size, orange_size)[t]:
-                raise ValueError(f"state.cars: {name!r} is not in a {blue_size}v{orange_size} game")
-        mates_n, opps_n = self.slots(blue_size, orange_size)
-        if self._cached_state is not state:  # every agent of one decision shares the per-car features
+        # Every agent of one decision shares the per-car features and the team frames' blocks.
+        if self._cached_state is not state or self._cached_sizes != (blue_size, orange_size):
+            for name in state.cars:
+                t, i = agent_team(name), int(name.rsplit("_", 1)[1])
+                if i >= (blue_size, orange_size)[t]:
+                    raise ValueError(f"state.cars: {name!r} is not in a {blue_size}v{orange_size} game")
             self._cached_cars = {name: car_features(car) for name, car in state.cars.items()}
-            self._cached_state = state
-        sign = team_sign(agent)
-        feature_sign = _FEATURE_MIRROR if team != BLUE else 1.0
+            self._cached_frames = {}
+            self._cached_state, self._cached_sizes = state, (blue_size, orange_size)
+        if team not in self._cached_frames:
+            self._cached_frames[team] = self._team_frame(team, state)
+        cars, ball_parts, timers = self._cached_frames[team]
+        mates_n, opps_n = self.slots(blue_size, orange_size)
         absent = np.zeros(len(CAR_FEATURES))
-
-        def features(name: str) -> np.ndarray:
-            return self._cached_cars[name] * feature_sign if name in self._cached_cars else absent
         own, other = TEAM_NAMES[team], TEAM_NAMES[1 - team]
         mates = [f"{own}_{i}" for i in range(own_size) if i != index]
         opps = [f"{other}_{i}" for i in range(other_size)]
-        ball = state.ball
-        parts = [features(agent),
-                 ball.pos * sign / POS_SCALE, ball.vel * sign / BALL_VEL_SCALE,
-                 ball.ang_vel * sign / BALL_ANG_VEL_SCALE]
-        parts += [features(name) for name in mates] + [absent] * (mates_n - len(mates))
-        parts += [features(name) for name in opps] + [absent] * (opps_n - len(opps))
-        timers = np.asarray(state.pad_timers, dtype=np.float64) / PAD_COOLDOWN
-        parts.append(timers if team == BLUE else timers[PAD_MIRROR])
+        parts = [cars.get(agent, absent), *ball_parts]
+        parts += [cars.get(name, absent) for name in mates] + [absent] * (mates_n - len(mates))
+        parts += [cars.get(name, absent) for name in opps] + [absent] * (opps_n - len(opps))
+        parts.append(timers)
         own_score, other_score = state.score[team], state.score[1 - team]
         parts.append([math.tanh((own_score - other_score) / SCORE_DIFF_SCALE), state.clock_s / CLOCK_SCALE_S,
                       float(state.is_overtime), float(state.kickoff_pending)])
         space = self._make_space(blue_size, orange_size)
         return _finish(np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts]), space)
+
+    def _team_frame(self, team: int, state: GameState) -> tuple[dict[str, np.ndarray], list[np.ndarray], np.ndarray]:
+        """What every agent of ``team`` sees alike: car features, ball and pad timers in the team's frame."""
+        sign = np.ones(3) if team == BLUE else MIRROR
+        feature_sign = _FEATURE_MIRROR if team != BLUE else 1.0
+        cars = {name: features * feature_sign for name, features in self._cached_cars.items()}
+        ball = state.ball
+        ball_parts = [ball.pos * sign / POS_SCALE, ball.vel * sign / BALL_VEL_SCALE,
+                      ball.ang_vel * sign / BALL_ANG_VEL_SCALE]
+        timers = np.asarray(state.pad_timers, dtype=np.float64) / PAD_COOLDOWN
+        return cars, ball_parts, timers if team == BLUE else timers[PAD_MIRROR]
 
 
 # ================================================================= the seed's minigame sensors
