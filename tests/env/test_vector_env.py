@@ -15,6 +15,8 @@ def _lone_rows(env, values: dict, agents: list[str]) -> np.ndarray:
 @pytest.mark.parametrize("config, overrides, n_arenas, lane, n_steps", [
     # timeouts of 1 s: a dozen episodes end (terminated) and auto-reset inside the run
     ("minigames/penalty.yaml", {"timeout_s": 1.0}, 3, 2, 90),
+    # a static barrier box in each arena of the batch, moved every round
+    ("minigames/barrier.yaml", {"timeout_s": 1.0}, 2, 1, 60),
     # a 2v2 match cut at 25 decisions: truncation, auto-reset, four cars colliding
     ("matches/2v2.yaml", {"kickoff_countdown_s": 0.0, "max_cycles": 25, "info_format": "numeric"}, 3, 1, 60),
 ])
