@@ -148,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
           f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| scene | " + " | ".join(TITLES[c] for c in COLUMNS) + " | Vector64 / single | Vector64 / RocketSim | "
           "Vector64 / bare 64 | peak MB: env / Vector16 / Vector64 | MB per arena |")
-    print("|---|" + "---:|" * (len(COLUMNS) + 4))
+    print("|---|" + "---:|" * (len(COLUMNS) + 5))
     notes = set()
     for size in args.sizes:
         cells = {}
