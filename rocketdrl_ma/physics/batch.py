@@ -299,8 +299,9 @@ class ArenaBatch:
         cid = self.client
         vel = (self.car_vel * M_PER_UU).tolist()
         ang = self.car_ang_vel.tolist()
+        writable = (self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0)).tolist()
         for s in self._slots:
-            if self.car_active[s.index] and not self.cs[s.index, CS_IS_DEMOED]:
+            if writable[s.index]:
                 pb.resetBaseVelocity(s.body, vel[s.index], ang[s.index], physicsClientId=cid)
 
     def _write_ball(self, k: int, position: bool = False) -> None:
@@ -311,6 +312,21 @@ class ArenaBatch:
                                                (0, 0, 0, 1), physicsClientId=cid)
         pb.resetBaseVelocity(body, (self.ball_vel[k] * M_PER_UU).tolist(), self.ball_ang_vel[k].tolist(),
                              physicsClientId=cid)
+
+    def _hold_frozen_balls(self) -> None:
+        """Put every frozen ball back in place with a velocity that cancels this tick's gravity, so it stays
+        exactly where it is (the arithmetic of ``_write_ball``, done for all of them at once)."""
+        cid = self.client
+        frozen = np.flatnonzero(self.ball_frozen)
+        self.ball_pos[frozen] = self._ball_frozen_pos[frozen]
+        self.ball_vel[frozen] = (0.0, 0.0, -C.GRAVITY_Z * self.dt)
+        positions = ((self.ball_pos[frozen] + self.origins[frozen]) * M_PER_UU).tolist()
+        velocities = (self.ball_vel[frozen] * M_PER_UU).tolist()
+        spins = self.ball_ang_vel[frozen].tolist()
+        for k, pos, vel, spin in zip(frozen.tolist(), positions, velocities, spins):
+            body = self._ball_bodies[k]
+            pb.resetBasePositionAndOrientation(body, pos, (0, 0, 0, 1), physicsClientId=cid)
+            pb.resetBaseVelocity(body, vel, spin, physicsClientId=cid)
 
     def set_ball(self, arena: int, pos: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
         self._read_state()
@@ -343,11 +359,8 @@ class ArenaBatch:
                              self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
                              self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
                 self._write_car_velocities()
-            for k in (np.flatnonzero(self.ball_frozen) if self.ball_frozen.any() else ()):
-                # Cancel this tick's gravity so the frozen ball stays exactly where it is.
-                self.ball_pos[k] = self._ball_frozen_pos[k]
-                self.ball_vel[k] = (0.0, 0.0, -C.GRAVITY_Z * self.dt)
-                self._write_ball(k, position=True)
+            if self.ball_frozen.any():
+                self._hold_frozen_balls()
             # RocketSim scores a car's touch from the velocities at contact, before the solver resolves it.
             self._pre_step = (self.car_pos.copy(), self.car_vel.copy(), self.ball_pos.copy(), self.ball_vel.copy())
             pb.stepSimulation(physicsClientId=cid)
