@@ -4,7 +4,7 @@ Columns: our single ``Arena``; our ``ArenaBatch`` of 16 and 64 arenas (arena-tic
 RocketSim driven from Python the same way; bare PyBullet ``stepSimulation`` of our bodies, one arena and 64
 (no car model, no state reads: the ceiling of our design). Then the ratios. The machine is shared: compare within one run.
 
-Run from the repo root: ``nice -n 10 .venv/bin/python benchmarks/physics_speed.py [--seconds 2] [--sizes 1 2 3 4]``
+Run from the repo root: ``nice -n 10 .venv/bin/python benchmarks/physics_speed.py [--seconds 2] [--sizes 1 2 3 4] [--clock cpu]``
 """
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def ours_batch(team_size: int, n_arenas: int, seed: int = 0):
     return run, batch
 
 
-def measure(column: str, team_size: int, seconds: float) -> float:
+def measure(column: str, team_size: int, seconds: float, clock: str = "wall") -> float:
     """Ticks/s (arena-ticks/s for batches) of one column on one scene."""
     closer = None
     n_arenas = 1
@@ -78,7 +78,7 @@ def measure(column: str, team_size: int, seconds: float) -> float:
     else:
         raise ValueError(f"column: {column!r} is not one of {COLUMNS}")
     run(2)  # warm-up (numba dispatch, first contacts)
-    decisions, elapsed = timed(run, seconds, chunk=max(1, 40 // n_arenas))
+    decisions, elapsed = timed(run, seconds, chunk=max(1, 40 // n_arenas), clock=clock)
     if closer is not None:
         closer.close()
     return decisions * TICKS_PER_DECISION * n_arenas / elapsed
@@ -88,24 +88,27 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=2.0, help="timed seconds per cell (default 2)")
     ap.add_argument("--sizes", type=int, nargs="+", default=[1, 2, 3, 4], help="team sizes (default 1 2 3 4)")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="wall: elapsed time; cpu: the process's CPU time (steadier on a shared machine)")
     args = ap.parse_args(argv)
     for size in args.sizes:
         if size not in (1, 2, 3, 4):
             raise ValueError(f"--sizes: team sizes are 1..4, got {size}")
     os.chdir(ROOT)
     load = os.getloadavg()[0]
-    print(f"# physics ticks/s, random controls every {TICKS_PER_DECISION} ticks, {args.seconds:g} s per cell, "
+    print(f"# physics ticks per {args.clock} second, random controls every {TICKS_PER_DECISION} ticks, "
+          f"{args.seconds:g} s per cell, "
           f"load average {load:.2f} on {os.cpu_count()} cores")
     print("| scene | Arena | ArenaBatch 16 | ArenaBatch 64 | RocketSim | bare PyBullet 1 | bare PyBullet 64 | "
           "Arena / RocketSim | Batch64 / RocketSim | Arena / bare 1 | Batch64 / bare 64 |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for size in args.sizes:
-        r = {column: measure(column, size, args.seconds) for column in COLUMNS}
+        r = {column: measure(column, size, args.seconds, args.clock) for column in COLUMNS}
         print(f"| {size}v{size} | {r['arena']:,.0f} | {r['batch16']:,.0f} | {r['batch64']:,.0f} | "
               f"{r['rocketsim']:,.0f} | {r['bare_pybullet']:,.0f} | {r['bare_pybullet64']:,.0f} | "
               f"{r['arena'] / r['rocketsim']:.2f} | {r['batch64'] / r['rocketsim']:.2f} | "
               f"{r['arena'] / r['bare_pybullet']:.2f} | {r['batch64'] / r['bare_pybullet64']:.2f} |", flush=True)
-    print("Batches count arena-ticks/s (ticks x arenas). bare PyBullet: stepSimulation only, 1 or 64 arenas.")
+    print("Batches count arena-ticks (ticks x arenas). bare PyBullet: stepSimulation only, 1 or 64 arenas.")
     return 0
 
 

@@ -8,7 +8,7 @@ design); dm_control soccer when it is installed. An agent-step is one agent's de
 process, so its peak memory (``ru_maxrss``) is its own; memory per arena is the difference between the 64- and the
 16-arena VectorEnv divided by 48, which leaves out what every process pays once (interpreter, libraries, kernels).
 
-Run from the repo root: ``nice -n 10 .venv/bin/python benchmarks/throughput.py [--seconds 3] [--sizes 1 2 3 4]``
+Run from the repo root: ``nice -n 10 .venv/bin/python benchmarks/throughput.py [--seconds 3] [--sizes 1 2 3 4] [--clock cpu]``
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ def _config(team_size: int) -> str:
     return os.path.join("matches", f"{team_size}v{team_size}.yaml")
 
 
-def _single(team_size: int, seconds: float) -> float:
+def _single(team_size: int, seconds: float, clock: str) -> float:
     from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 
     env = RocketDRLParallelEnv(_config(team_size), kickoff_countdown_s=0.0, tick_skip=TICKS_PER_DECISION)
@@ -49,12 +49,12 @@ def _single(team_size: int, seconds: float) -> float:
             env.step({agent: rng.uniform(space.low, space.high).astype(np.float32) for agent in env.agents})
 
     run(2)
-    decisions, elapsed = timed(run, seconds)
+    decisions, elapsed = timed(run, seconds, clock=clock)
     env.close()
     return decisions * 2 * team_size / elapsed
 
 
-def _vector(team_size: int, n_arenas: int, seconds: float) -> float:
+def _vector(team_size: int, n_arenas: int, seconds: float, clock: str) -> float:
     from rocketdrl_ma.env.vector_env import VectorEnv
 
     env = VectorEnv(_config(team_size), n_arenas=n_arenas, kickoff_countdown_s=0.0, tick_skip=TICKS_PER_DECISION)
@@ -68,27 +68,27 @@ def _vector(team_size: int, n_arenas: int, seconds: float) -> float:
             env.step(rng.uniform(space.low, space.high, shape).astype(np.float32))
 
     run(1)
-    decisions, elapsed = timed(run, seconds, chunk=1)
+    decisions, elapsed = timed(run, seconds, chunk=1, clock=clock)
     env.close()
     return decisions * n_arenas * env.n_agents / elapsed
 
 
-def _rocketsim(team_size: int, seconds: float) -> float:
+def _rocketsim(team_size: int, seconds: float, clock: str) -> float:
     run = rocketsim_runner(team_size)
     run(2)
-    decisions, elapsed = timed(run, seconds)
+    decisions, elapsed = timed(run, seconds, clock=clock)
     return decisions * 2 * team_size / elapsed
 
 
-def _bare(team_size: int, n_arenas: int, seconds: float) -> float:
+def _bare(team_size: int, n_arenas: int, seconds: float, clock: str) -> float:
     run, batch = bare_pybullet_runner(team_size, n_arenas)
     run(1)
-    decisions, elapsed = timed(run, seconds, chunk=1)
+    decisions, elapsed = timed(run, seconds, chunk=1, clock=clock)
     batch.close()
     return decisions * n_arenas * 2 * team_size / elapsed
 
 
-def _dm_control(team_size: int, seconds: float) -> float:
+def _dm_control(team_size: int, seconds: float, clock: str) -> float:
     from dm_control.locomotion import soccer
 
     env = soccer.load(team_size=team_size, time_limit=10.0, disable_walker_contacts=False)
@@ -103,11 +103,11 @@ def _dm_control(team_size: int, seconds: float) -> float:
                 env.reset()
 
     run(2)
-    decisions, elapsed = timed(run, seconds)
+    decisions, elapsed = timed(run, seconds, clock=clock)
     return decisions * 2 * team_size / elapsed
 
 
-def run_cell(column: str, team_size: int, seconds: float) -> dict:
+def run_cell(column: str, team_size: int, seconds: float, clock: str = "wall") -> dict:
     """One cell in this process: agent-steps/s and the process's peak resident memory (MB)."""
     if column == "dm_control":
         try:
@@ -115,17 +115,17 @@ def run_cell(column: str, team_size: int, seconds: float) -> dict:
         except ImportError:
             return {"error": "not installed"}
     if column == "single":
-        rate = _single(team_size, seconds)
+        rate = _single(team_size, seconds, clock)
     elif column.startswith("vector"):
-        rate = _vector(team_size, int(column[len("vector"):]), seconds)
+        rate = _vector(team_size, int(column[len("vector"):]), seconds, clock)
     elif column == "rocketsim":
-        rate = _rocketsim(team_size, seconds)
+        rate = _rocketsim(team_size, seconds, clock)
     elif column.startswith("bare"):
-        rate = _bare(team_size, int(column[len("bare"):]), seconds)
+        rate = _bare(team_size, int(column[len("bare"):]), seconds, clock)
     elif column == "dm_control":
         if team_size > 2:
             return {"error": "1v1 and 2v2 only"}
-        rate = _dm_control(team_size, seconds)
+        rate = _dm_control(team_size, seconds, clock)
     else:
         raise ValueError(f"column: {column!r} is not one of {COLUMNS}")
     return {"rate": rate, "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
@@ -135,16 +135,19 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=3.0, help="timed seconds per cell (default 3)")
     ap.add_argument("--sizes", type=int, nargs="+", default=[1, 2, 3, 4], help="team sizes (default 1 2 3 4)")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="wall: elapsed time; cpu: the process's CPU time (steadier on a shared machine)")
     ap.add_argument("--cell", nargs=2, metavar=("COLUMN", "TEAM_SIZE"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     os.chdir(ROOT)
     if args.cell:
-        print(json.dumps(run_cell(args.cell[0], int(args.cell[1]), args.seconds)))
+        print(json.dumps(run_cell(args.cell[0], int(args.cell[1]), args.seconds, args.clock)))
         return 0
     for size in args.sizes:
         if size not in (1, 2, 3, 4):
             raise ValueError(f"--sizes: team sizes are 1..4, got {size}")
-    print(f"# agent-steps/s, a decision every {TICKS_PER_DECISION} ticks, {args.seconds:g} s per cell, "
+    print(f"# agent-steps per {args.clock} second, a decision every {TICKS_PER_DECISION} ticks, "
+          f"{args.seconds:g} s per cell, "
           f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| scene | " + " | ".join(TITLES[c] for c in COLUMNS) + " | Vector64 / single | Vector64 / RocketSim | "
           "Vector64 / bare 64 | peak MB: env / Vector16 / Vector64 | MB per arena |")
@@ -153,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     for size in args.sizes:
         cells = {}
         for column in COLUMNS:
-            out = subprocess.run([sys.executable, os.path.abspath(__file__), "--seconds", str(args.seconds),
+            out = subprocess.run([sys.executable, os.path.abspath(__file__), "--seconds", str(args.seconds), "--clock", args.clock,
                                   "--cell", column, str(size)], capture_output=True, text=True, cwd=ROOT)
             if out.returncode != 0:
                 raise RuntimeError(f"cell {column} {size}v{size} failed:\n{out.stderr}")
