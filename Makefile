@@ -29,6 +29,7 @@ test-fast: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/physics_speed.py
+	$(PY) benchmarks/throughput.py
 	$(PY) benchmarks/fidelity.py
 
 clean:
