@@ -15,7 +15,7 @@ from .car_config import CarConfig
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BOOST, CS_DEMO_TIMER, CS_FLIP_TIME, CS_HANDBRAKE,
                          CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_FLIPPING,
                          CS_IS_JUMPING, CS_IS_SUPERSONIC, CS_JUMP_TIME, CS_ON_GROUND, CS_SUPERSONIC_TIME,
-                         CS_WHEEL_0)
+                         CS_TICK_MEMORY, CS_WHEEL_0)
 from .state import BallState, CarControls, CarState, _trusted, yaw_rot_mat
 
 
@@ -88,6 +88,7 @@ class Car:
         cs[CS_AIR_TIME_SINCE_JUMP] = state.air_time_since_jump
         cs[CS_SUPERSONIC_TIME] = state.supersonic_time
         cs[CS_DEMO_TIMER] = state.demo_respawn_timer if state.is_demoed else 0.0
+        cs[list(CS_TICK_MEMORY)] = 0.0
 
     def demolish(self) -> None:
         self._batch.demolish(self.id)
@@ -184,6 +185,10 @@ class Arena:
         if self._batch.n_arenas != 1:
             raise ValueError(f"step: this arena is one of an ArenaBatch of {self._batch.n_arenas}; step the batch")
         self._batch.step(ticks)
+
+    def reseed(self, seed: int) -> None:
+        """Restart this arena's own random stream (respawn spots, unseeded kickoffs) as ``Arena(seed=seed)`` starts it."""
+        self._batch.arena_rngs[self.index] = np.random.default_rng(seed)
 
     def reset_kickoff(self, seed: int | None = None) -> None:
         """Standard kickoff: a random permutation of the 5 spots, car i of each team on spot i, orange mirrored."""

@@ -51,6 +51,13 @@ CS_AUTOFLIP_SCALE = 40
 CS_BODY_CONTACT = 41  # the hitbox touched the arena last tick
 CS_BODY_NORMAL_X = 42  # three columns: that contact's normal
 CS_SIZE = 45
+# Memory of earlier ticks that CarState does not carry (the last jump input for edge detection, boost's minimum
+# duration, the wheel set-up Bullet applies one tick late, autoflip, body contact): set_state clears it, so a
+# state set on a used car plays on exactly as on a new car (RocketSim's CarState carries last_controls likewise).
+CS_TICK_MEMORY = (CS_BOOSTING_TIME, CS_IS_BOOSTING, CS_LAST_JUMP, CS_STEER_ANGLE, CS_ENGINE, CS_BRAKE,
+                  *range(CS_LAT_FRICTION_0, CS_LAT_FRICTION_0 + 4), *range(CS_LONG_FRICTION_0, CS_LONG_FRICTION_0 + 4),
+                  CS_IS_AUTOFLIPPING, CS_AUTOFLIP_TIMER, CS_AUTOFLIP_SCALE, CS_BODY_CONTACT,
+                  *range(CS_BODY_NORMAL_X, CS_BODY_NORMAL_X + 3))
 
 _THROTTLE_CURVE = np.array(C.THROTTLE_TORQUE_CURVE)
 _STEER_CURVE = np.array(C.STEER_ANGLE_CURVE)

@@ -116,8 +116,12 @@ class Rules(ABC):
             self._agent_by_car_id[car.id] = agent
 
     def reset(self, rng: np.random.Generator) -> None:
+        # Drawn on every reset, not only the first, so that reset(seed=s) of a used env replays a fresh env's game.
+        arena_seed = int(rng.integers(1 << 31))
         if self.arena is None:
-            self.build(seed=int(rng.integers(1 << 31)))
+            self.build(seed=arena_seed)
+        else:
+            self.arena.reseed(arena_seed)
         for car in self.cars.values():
             car.set_controls(NEUTRAL)
             if car.get_state().is_demoed:

@@ -78,6 +78,22 @@ def test_same_seed_and_actions_are_bit_identical_for_1000_steps(team_size):
         e.close()
 
 
+def test_reset_with_a_seed_replays_a_fresh_env_game_on_a_used_env():
+    used, fresh = make(2, action="continuous"), make(2, action="continuous")
+    rng = np.random.default_rng(1)
+    used.reset(seed=99)
+    for _ in range(200):  # play (bumps, demos, pad pickups) so that the used env carries state and spent randomness
+        used.step({a: rng.uniform(-1, 1, 8).astype(np.float32) for a in used.agents})
+    obs = [used.reset(seed=7)[0], fresh.reset(seed=7)[0]]
+    for step in range(400):
+        for a in obs[0]:
+            assert np.array_equal(obs[0][a], obs[1][a]), (step, a)
+        actions = {a: rng.uniform(-1, 1, 8).astype(np.float32) for a in fresh.agents}
+        obs = [used.step(actions)[0], fresh.step(actions)[0]]
+    used.close()
+    fresh.close()
+
+
 def test_observations_stay_in_their_space_for_every_builder():
     for name in ("team_relative", "seed_sensors", "ray"):
         env = make(2, observation=name)
