@@ -15,6 +15,7 @@ from numba import njit
 
 from . import constants as C
 from .arena_geometry import arena_mesh
+from .body_io import read_rows, unpack_rows
 from .car_config import CarConfig, get_preset
 from .car_kernel import (CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER, CS_IS_DEMOED, CS_IS_SUPERSONIC, CS_ON_GROUND, CS_SIZE, boost_pad_tick,
                          car_post_tick, car_pre_tick, interp)
@@ -29,22 +30,6 @@ _BALL_HIT_CURVE = np.array(C.BALL_HIT_SCALE_CURVE)
 _BUMP_GROUND = np.array(C.BUMP_VEL_CURVE_GROUND)
 _BUMP_AIR = np.array(C.BUMP_VEL_CURVE_AIR)
 _BUMP_UP = np.array(C.BUMP_UPWARD_VEL_CURVE)
-
-
-@njit(cache=True)
-def quats_to_mats(quats, out):
-    """(N, 4) xyzw quaternions to (N, 3, 3) rotation matrices."""
-    for i in range(quats.shape[0]):
-        x, y, z, w = quats[i, 0], quats[i, 1], quats[i, 2], quats[i, 3]
-        out[i, 0, 0] = 1 - 2 * (y * y + z * z)
-        out[i, 0, 1] = 2 * (x * y - z * w)
-        out[i, 0, 2] = 2 * (x * z + y * w)
-        out[i, 1, 0] = 2 * (x * y + z * w)
-        out[i, 1, 1] = 1 - 2 * (x * x + z * z)
-        out[i, 1, 2] = 2 * (y * z - x * w)
-        out[i, 2, 0] = 2 * (x * z - y * w)
-        out[i, 2, 1] = 2 * (y * z + x * w)
-        out[i, 2, 2] = 1 - 2 * (x * x + y * y)
 
 
 @njit(cache=True)
@@ -142,6 +127,11 @@ class ArenaBatch:
         self.ball_frozen = np.zeros(n_arenas, dtype=bool)
         self._ball_frozen_pos = np.zeros((n_arenas, 3))
         self._ball_dirty = np.zeros(n_arenas, dtype=bool)
+        # What holding a frozen ball writes each tick, computed once when it is frozen (metres, PyBullet's frame).
+        self._ball_hold_vel = np.array([0.0, 0.0, -C.GRAVITY_Z * self.dt])
+        self._ball_hold_vel_m = (self._ball_hold_vel * M_PER_UU).tolist()
+        self._ball_hold_pos_m: list[list[float]] = [[0.0, 0.0, 0.0]] * n_arenas
+        self._read_plan: tuple[bytes, list[int], np.ndarray] | None = None  # see _read_plan_for
         self.pad_timer = np.zeros((n_arenas, len(C.BOOST_PAD_POSITIONS)))
         self._slots: list[_CarSlot] = []
         self._slot_by_body: dict[int, _CarSlot] = {}
@@ -256,6 +246,8 @@ class ArenaBatch:
         self.wheel_is_front = np.array([w["is_front"] for w in wheels], dtype=np.bool_).reshape(n, 4)
         self.inv_inertia = np.array([1.0 / (s.config.inertia_diag * C.UU_PER_M**2) for s in self._slots]).reshape(n, 3)
         self.three_wheel = np.array([s.config.three_wheel for s in self._slots], dtype=np.bool_)
+        self._car_bodies = [s.body for s in self._slots]
+        self._read_plan = None
         for k, s in enumerate(self._slots):
             s.index = k
             if old and s.car_id in old:
@@ -270,39 +262,39 @@ class ArenaBatch:
 
     # ------------------------------------------------------------------ state I/O (uu <-> metres)
     def _read_state(self) -> None:
+        """Refresh every ball and car from PyBullet (no-op while the arrays are current)."""
         if self._state_fresh:
             return
-        cid = self.client
-        # One array assignment per quantity: filling rows one by one cost more than the PyBullet calls.
-        poses = [pb.getBasePositionAndOrientation(body, physicsClientId=cid) for body in self._ball_bodies]
-        vels = [pb.getBaseVelocity(body, physicsClientId=cid) for body in self._ball_bodies]
-        self.ball_pos[:] = [pose[0] for pose in poses]
-        self.ball_vel[:] = [vel[0] for vel in vels]
-        self.ball_ang_vel[:] = [vel[1] for vel in vels]
-        self.ball_pos *= C.UU_PER_M
-        self.ball_pos -= self.origins
-        self.ball_vel *= C.UU_PER_M
-        if self._slots:  # slot k holds index k (see _rebuild_car_arrays)
-            poses = [pb.getBasePositionAndOrientation(s.body, physicsClientId=cid) for s in self._slots]
-            vels = [pb.getBaseVelocity(s.body, physicsClientId=cid) for s in self._slots]
-            self.car_pos[:] = [pose[0] for pose in poses]
-            self.car_quat[:] = [pose[1] for pose in poses]
-            self.car_vel[:] = [vel[0] for vel in vels]
-            self.car_ang_vel[:] = [vel[1] for vel in vels]
-            self.car_pos *= C.UU_PER_M
-            self.car_pos -= self.origins[self.car_arena]
-            self.car_vel *= C.UU_PER_M
-            quats_to_mats(self.car_quat, self.car_rot)
+        self._read_bodies(self._ball_bodies + self._car_bodies,
+                          np.arange(self.n_arenas + len(self._car_bodies), dtype=np.int64))
         self._state_fresh = True
+
+    def _read_bodies(self, bodies: list[int], targets: np.ndarray) -> None:
+        """Read ``bodies`` into the arrays: target ``t < n_arenas`` is ball ``t``, else car ``t - n_arenas``."""
+        unpack_rows(read_rows(bodies, self.client), targets, self.n_arenas, self.origins, self.car_arena,
+                    self.ball_pos, self.ball_vel, self.ball_ang_vel, self.car_pos, self.car_quat, self.car_rot,
+                    self.car_vel, self.car_ang_vel)
+
+    def _read_plan_for(self, frozen: np.ndarray) -> tuple[list[int], np.ndarray]:
+        """The bodies a tick reads after its step: every car, and the balls not frozen (``ball_post_tick`` puts
+        a frozen ball back in place anyway). Kept until the frozen set or the cars change."""
+        key = frozen.tobytes()
+        if self._read_plan is None or self._read_plan[0] != key:
+            balls = np.flatnonzero(~frozen).tolist()
+            targets = np.array(balls + list(range(self.n_arenas, self.n_arenas + len(self._car_bodies))),
+                               dtype=np.int64)
+            self._read_plan = (key, [self._ball_bodies[k] for k in balls] + self._car_bodies, targets)
+        return self._read_plan[1], self._read_plan[2]
 
     def _write_car_velocities(self) -> None:
         cid = self.client
+        reset_velocity = pb.resetBaseVelocity
         vel = (self.car_vel * M_PER_UU).tolist()
         ang = self.car_ang_vel.tolist()
         writable = (self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0)).tolist()
-        for s in self._slots:
-            if writable[s.index]:
-                pb.resetBaseVelocity(s.body, vel[s.index], ang[s.index], physicsClientId=cid)
+        for body, ok, v, w in zip(self._car_bodies, writable, vel, ang):
+            if ok:
+                reset_velocity(body, v, w, cid)
 
     def _write_ball(self, k: int, position: bool = False) -> None:
         cid = self.client
@@ -313,20 +305,17 @@ class ArenaBatch:
         pb.resetBaseVelocity(body, (self.ball_vel[k] * M_PER_UU).tolist(), self.ball_ang_vel[k].tolist(),
                              physicsClientId=cid)
 
-    def _hold_frozen_balls(self) -> None:
+    def _hold_frozen_balls(self, frozen: list[int]) -> None:
         """Put every frozen ball back in place with a velocity that cancels this tick's gravity, so it stays
-        exactly where it is (the arithmetic of ``_write_ball``, done for all of them at once)."""
+        exactly where it is (the arithmetic of ``_write_ball``, done once when the ball was frozen)."""
         cid = self.client
-        frozen = np.flatnonzero(self.ball_frozen)
-        self.ball_pos[frozen] = self._ball_frozen_pos[frozen]
-        self.ball_vel[frozen] = (0.0, 0.0, -C.GRAVITY_Z * self.dt)
-        positions = ((self.ball_pos[frozen] + self.origins[frozen]) * M_PER_UU).tolist()
-        velocities = (self.ball_vel[frozen] * M_PER_UU).tolist()
-        spins = self.ball_ang_vel[frozen].tolist()
-        for k, pos, vel, spin in zip(frozen.tolist(), positions, velocities, spins):
+        reset_pose, reset_velocity = pb.resetBasePositionAndOrientation, pb.resetBaseVelocity
+        for k in frozen:
+            self.ball_pos[k] = self._ball_frozen_pos[k]
+            self.ball_vel[k] = self._ball_hold_vel
             body = self._ball_bodies[k]
-            pb.resetBasePositionAndOrientation(body, pos, (0, 0, 0, 1), physicsClientId=cid)
-            pb.resetBaseVelocity(body, vel, spin, physicsClientId=cid)
+            reset_pose(body, self._ball_hold_pos_m[k], (0, 0, 0, 1), cid)
+            reset_velocity(body, self._ball_hold_vel_m, self.ball_ang_vel[k].tolist(), cid)
 
     def set_ball(self, arena: int, pos: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
         self._read_state()
@@ -334,6 +323,7 @@ class ArenaBatch:
         # Like the game, a ball placed at rest hangs where it is until something touches it.
         self.ball_frozen[arena] = not (np.any(vel) or np.any(ang_vel))
         self._ball_frozen_pos[arena] = pos
+        self._ball_hold_pos_m[arena] = ((self._ball_frozen_pos[arena] + self.origins[arena]) * M_PER_UU).tolist()
         self._write_ball(arena, position=True)
 
     def set_car(self, car_id: int, pos: np.ndarray, rot: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
@@ -351,6 +341,7 @@ class ArenaBatch:
         if not isinstance(ticks, (int, np.integer)) or ticks < 0:
             raise ValueError(f"ticks: must be an int >= 0, got {ticks!r}")
         cid = self.client
+        step_simulation = pb.stepSimulation
         for _ in range(ticks):
             self._read_state()
             if self._slots:
@@ -359,46 +350,49 @@ class ArenaBatch:
                              self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
                              self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
                 self._write_car_velocities()
-            if self.ball_frozen.any():
-                self._hold_frozen_balls()
+            frozen = np.flatnonzero(self.ball_frozen).tolist()
+            if frozen:
+                self._hold_frozen_balls(frozen)
             # RocketSim scores a car's touch from the velocities at contact, before the solver resolves it.
             self._pre_step = (self.car_pos.copy(), self.car_vel.copy(), self.ball_pos.copy(), self.ball_vel.copy())
-            pb.stepSimulation(physicsClientId=cid)
+            step_simulation(cid)
             self.tick_count += 1
-            self._state_fresh = False
-            self._read_state()
+            self._read_bodies(*self._read_plan_for(self.ball_frozen))
+            self._state_fresh = True
             self._post_tick()
 
     def _post_tick(self) -> None:
         touches: set[tuple[int, int]] = set()
         car_pairs: dict[tuple[int, int], tuple] = {}
+        ball_arena, slot_by_body = self._ball_arena, self._slot_by_body
         for c in pb.getContactPoints(physicsClientId=self.client):
             a, b = c[1], c[2]
-            if a in self._ball_arena or b in self._ball_arena:
-                ball, other = (a, b) if a in self._ball_arena else (b, a)
-                if other in self._slot_by_body:
-                    touches.add((other, self._ball_arena[ball]))
-            elif a in self._slot_by_body and b in self._slot_by_body:
+            if a in ball_arena or b in ball_arena:
+                ball, other = (a, b) if a in ball_arena else (b, a)
+                if other in slot_by_body:
+                    touches.add((other, ball_arena[ball]))
+            elif a in slot_by_body and b in slot_by_body:
                 car_pairs.setdefault((a, b), (c[5], c[6]))
             elif a in self._static_set or b in self._static_set:
                 # The hitbox touching the arena drives auto-flip and auto-roll next tick.
-                car, sign = (a, 1.0) if a in self._slot_by_body else (b, -1.0)
-                slot = self._slot_by_body.get(car)
+                car, sign = (a, 1.0) if a in slot_by_body else (b, -1.0)
+                slot = slot_by_body.get(car)
                 if slot is not None:
                     self.cs[slot.index, CS_BODY_CONTACT] = 1.0
                     self.cs[slot.index, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3] = np.multiply(c[7], sign)
         for body, k in sorted(touches):
-            self.ball_frozen[k] = False
-            self._ball_hit(self._slot_by_body[body], k)
+            if self.ball_frozen[k]:  # the tick's read skipped it: its state after the step is needed now
+                self.ball_frozen[k] = False
+                self._read_bodies([self._ball_bodies[k]], np.array([k], dtype=np.int64))
+            self._ball_hit(slot_by_body[body], k)
         for (a, b), (pos_on_a, pos_on_b) in sorted(car_pairs.items()):
-            sa, sb = self._slot_by_body[a], self._slot_by_body[b]
+            sa, sb = slot_by_body[a], slot_by_body[b]
             self._car_hit(sa, sb, np.array(pos_on_a) * C.UU_PER_M - self.origins[sa.arena])
             self._car_hit(sb, sa, np.array(pos_on_b) * C.UU_PER_M - self.origins[sb.arena])
         ball_post_tick(self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos,
                        self._ball_dirty)
-        for k in range(self.n_arenas):
-            if self._ball_dirty[k]:
-                self._write_ball(k)
+        for k in np.flatnonzero(self._ball_dirty).tolist():
+            self._write_ball(k)
         if self._slots:
             respawn_due = car_post_tick(self.car_vel, self.car_ang_vel, self.car_active, self.cs, self.dt)
             picked = 0

@@ -1,0 +1,65 @@
+"""Reading PyBullet bodies into the batch arrays with as little Python per body as possible.
+
+PyBullet has no call that reads several bodies, so every body costs two calls; everything after them
+(metres to uu, arena origins, quaternion to rotation matrix) runs for all bodies at once in one compiled
+kernel over a single array of raw rows, instead of a dozen NumPy operations per read.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pybullet as pb
+from numba import njit
+
+from . import constants as C
+
+ROW_SIZE = 13  # position (m), quaternion xyzw, linear velocity (m/s), angular velocity (rad/s)
+
+
+def read_rows(bodies: list[int], client: int) -> np.ndarray:
+    """(len(bodies), ROW_SIZE) raw PyBullet state of each body, in the order given."""
+    get_pose, get_velocity = pb.getBasePositionAndOrientation, pb.getBaseVelocity
+    rows = []
+    for body in bodies:
+        pos, quat = get_pose(body, client)
+        vel, ang_vel = get_velocity(body, client)
+        rows.append(pos + quat + vel + ang_vel)
+    return np.array(rows, dtype=np.float64).reshape(len(rows), ROW_SIZE)
+
+
+@njit(cache=True)
+def quat_to_mat(q, out):
+    """An xyzw quaternion to a 3x3 rotation matrix, written into ``out``."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    out[0, 0] = 1 - 2 * (y * y + z * z)
+    out[0, 1] = 2 * (x * y - z * w)
+    out[0, 2] = 2 * (x * z + y * w)
+    out[1, 0] = 2 * (x * y + z * w)
+    out[1, 1] = 1 - 2 * (x * x + z * z)
+    out[1, 2] = 2 * (y * z - x * w)
+    out[2, 0] = 2 * (x * z - y * w)
+    out[2, 1] = 2 * (y * z + x * w)
+    out[2, 2] = 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True)
+def unpack_rows(rows, targets, n_balls, origins, car_arena, ball_pos, ball_vel, ball_ang_vel,
+                car_pos, car_quat, car_rot, car_vel, car_ang_vel):
+    """Row ``r`` of ``read_rows`` into ball ``targets[r]`` (< n_balls) or car ``targets[r] - n_balls``, in uu
+    relative to its arena's origin (the arithmetic of a whole-array ``pos * UU_PER_M - origin``)."""
+    for r in range(rows.shape[0]):
+        t = targets[r]
+        if t < n_balls:
+            for j in range(3):
+                ball_pos[t, j] = rows[r, j] * C.UU_PER_M - origins[t, j]
+                ball_vel[t, j] = rows[r, 7 + j] * C.UU_PER_M
+                ball_ang_vel[t, j] = rows[r, 10 + j]
+        else:
+            i = t - n_balls
+            a = car_arena[i]
+            for j in range(3):
+                car_pos[i, j] = rows[r, j] * C.UU_PER_M - origins[a, j]
+                car_vel[i, j] = rows[r, 7 + j] * C.UU_PER_M
+                car_ang_vel[i, j] = rows[r, 10 + j]
+            for j in range(4):
+                car_quat[i, j] = rows[r, 3 + j]
+            quat_to_mat(car_quat[i], car_rot[i])
