@@ -34,7 +34,10 @@ _BUMP_UP = np.array(C.BUMP_UPWARD_VEL_CURVE)
 
 @njit(cache=True)
 def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty):
-    """Hold frozen balls still and apply the speed and spin caps; ``dirty`` marks balls to write back."""
+    """Hold frozen balls still and apply the speed and spin caps; ``dirty`` marks balls to write back.
+
+    Returns how many are dirty."""
+    n_dirty = 0
     for k in range(vel.shape[0]):
         dirty[k] = False
         if frozen[k]:
@@ -50,6 +53,8 @@ def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty):
         if spin > C.BALL_MAX_ANG_SPEED:
             ang_vel[k] *= C.BALL_MAX_ANG_SPEED / spin
             dirty[k] = True
+        n_dirty += dirty[k]
+    return n_dirty
 
 
 def mat_to_quat(m: np.ndarray) -> tuple[float, float, float, float]:
@@ -350,7 +355,7 @@ class ArenaBatch:
                              self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
                              self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
                 self._write_car_velocities()
-            frozen = np.flatnonzero(self.ball_frozen).tolist()
+            frozen = self.ball_frozen.nonzero()[0].tolist()
             if frozen:
                 self._hold_frozen_balls(frozen)
             # RocketSim scores a car's touch from the velocities at contact, before the solver resolves it.
@@ -362,10 +367,35 @@ class ArenaBatch:
             self._post_tick()
 
     def _post_tick(self) -> None:
+        contacts = pb.getContactPoints(physicsClientId=self.client)
+        if contacts:
+            self._contacts(contacts)
+        if ball_post_tick(self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos,
+                          self._ball_dirty):
+            for k in self._ball_dirty.nonzero()[0].tolist():
+                self._write_ball(k)
+        if self._slots:
+            respawn_due = car_post_tick(self.car_vel, self.car_ang_vel, self.car_active, self.cs, self.dt)
+            picked = 0
+            if self.boost_pads_enabled:
+                picked = boost_pad_tick(self.car_pos, self.car_arena, self.car_active, self.cs,
+                                        C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG, self.pad_timer, self.pad_picked,
+                                        self.dt)
+            if picked:
+                for k in np.flatnonzero(self.pad_picked >= 0):
+                    self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id,
+                                        int(self.pad_picked[k])))
+            if respawn_due:
+                for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
+                    if self.cs[k, CS_DEMO_TIMER] <= 0.0:
+                        self.respawn(self._slots[k].car_id)
+
+    def _contacts(self, contacts: tuple) -> None:
+        """This tick's contact points: ball touches, car-car hits, hitboxes touching the arena."""
         touches: set[tuple[int, int]] = set()
         car_pairs: dict[tuple[int, int], tuple] = {}
         ball_arena, slot_by_body = self._ball_arena, self._slot_by_body
-        for c in pb.getContactPoints(physicsClientId=self.client):
+        for c in contacts:
             a, b = c[1], c[2]
             if a in ball_arena or b in ball_arena:
                 ball, other = (a, b) if a in ball_arena else (b, a)
@@ -389,25 +419,6 @@ class ArenaBatch:
             sa, sb = slot_by_body[a], slot_by_body[b]
             self._car_hit(sa, sb, np.array(pos_on_a) * C.UU_PER_M - self.origins[sa.arena])
             self._car_hit(sb, sa, np.array(pos_on_b) * C.UU_PER_M - self.origins[sb.arena])
-        ball_post_tick(self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos,
-                       self._ball_dirty)
-        for k in np.flatnonzero(self._ball_dirty).tolist():
-            self._write_ball(k)
-        if self._slots:
-            respawn_due = car_post_tick(self.car_vel, self.car_ang_vel, self.car_active, self.cs, self.dt)
-            picked = 0
-            if self.boost_pads_enabled:
-                picked = boost_pad_tick(self.car_pos, self.car_arena, self.car_active, self.cs,
-                                        C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG, self.pad_timer, self.pad_picked,
-                                        self.dt)
-            if picked:
-                for k in np.flatnonzero(self.pad_picked >= 0):
-                    self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id,
-                                        int(self.pad_picked[k])))
-            if respawn_due:
-                for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
-                    if self.cs[k, CS_DEMO_TIMER] <= 0.0:
-                        self.respawn(self._slots[k].car_id)
 
     def _ball_hit(self, slot: _CarSlot, arena: int) -> None:
         """Rocket League's extra push on a car touch, at most once every other tick per car."""

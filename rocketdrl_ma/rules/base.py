@@ -66,7 +66,10 @@ class Rules(ABC):
         self._touching: set[str] = set()  # agents in contact with the ball on the last tick
         self.last_controls: dict[str, CarControls] = {}
         self._agent_by_car_id: dict[int, str] = {}
-        self._control_rows: dict[str, np.ndarray] = {}
+        # This decision's control rows of every car and where they go in the batch (see begin_decision)
+        self._control_index = np.zeros(0, dtype=np.int64)
+        self._control_matrix = np.zeros((0, len(_NEUTRAL_ROW)))
+        self._neutral_matrix = self._control_matrix
         # Makes the arena on the first reset from a seed the episode's rng draws; None: a lone Arena(seed).
         # A vectorised env sets it to hand out the arenas of one ArenaBatch.
         self.arena_factory: Callable[[int], Arena] | None = None
@@ -144,7 +147,7 @@ class Rules(ABC):
         for _ in range(ticks):
             self.apply_controls()
             self.arena.step(1)
-            physics_events = list(batch.events)
+            physics_events = batch.events[:]
             batch.clear_events()
             self.end_tick(physics_events)
 
@@ -152,17 +155,18 @@ class Rules(ABC):
         """Before a decision's ticks; a subclass clears its per-decision records here."""
         self.events = []
         self.last_controls.update(controls)
-        self._control_rows = {agent: c.as_array() for agent, c in self.last_controls.items()}
+        # The rows of validated CarControls, written straight into the batch each tick by one array assignment
+        # (Car.set_controls per car and tick rebuilt and re-checked them 8 times per decision).
+        self._control_index = np.array([car._k for car in self.cars.values()], dtype=np.int64)
+        self._control_matrix = np.array([self.last_controls[agent].as_array() for agent in self.cars]).reshape(
+            len(self.cars), len(_NEUTRAL_ROW))
+        if len(self._neutral_matrix) != len(self.cars):
+            self._neutral_matrix = np.tile(_NEUTRAL_ROW, (len(self.cars), 1))
 
     def apply_controls(self) -> None:
         """Before each tick: the decision's controls, or neutral ones while the cars are frozen."""
-        rows = self._control_rows
         frozen = self.controls_frozen()
-        batch_controls = self.arena._batch.controls
-        for agent, car in self.cars.items():
-            # The rows of validated CarControls, written straight into the batch (Car.set_controls per tick
-            # rebuilt and re-checked them 8 times per decision).
-            batch_controls[car._k] = _NEUTRAL_ROW if frozen else rows[agent]
+        self.arena._batch.controls[self._control_index] = self._neutral_matrix if frozen else self._control_matrix
 
     def end_tick(self, physics_events: list[tuple]) -> None:
         """After each tick: this arena's raw physics events (``ArenaBatch.events`` entries) become game events,

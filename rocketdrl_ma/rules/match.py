@@ -63,8 +63,11 @@ class Match(Rules):
 
     def on_tick(self) -> None:
         dt = self.arena.tick_time
-        ball = self.arena.ball.get_state()
-        self._score_touch_events(ball)
+        # The ball's position and velocity as plain copies: a BallState per tick cost more than the rest of this.
+        batch, k = self.arena._batch, self.arena.index
+        batch._read_state()
+        ball_pos, ball_vel = batch.ball_pos[k].copy(), batch.ball_vel[k].copy()
+        self._score_touch_events(ball_pos, ball_vel)
         if self.ended:
             return
         if self.countdown_s > 0.0:
@@ -82,30 +85,32 @@ class Match(Rules):
             if self.score[BLUE] == self.score[ORANGE]:
                 self.overtime = True
                 self.events.append({"kind": "overtime", "tick": self.arena.tick_count})
-            elif ball.pos[2] <= BALL_ON_GROUND_Z:
+            elif ball_pos[2] <= BALL_ON_GROUND_Z:
                 self.ended = True  # zero-second rule: the match ends once the ball touches the ground
 
-    def _score_touch_events(self, ball) -> None:
+    def _score_touch_events(self, ball_pos: np.ndarray, ball_vel: np.ndarray) -> None:
         """Classify this tick's new touches as shots (heading into the opponent goal after the touch) or saves
         (the ball was heading into the toucher's own goal before it and is not after), and count stats."""
-        prev = self._ball_prev
+        prev = self._ball_prev  # (pos, vel) after the previous tick
+        self._ball_prev = (ball_pos, ball_vel)
+        if len(self.events) == self._classified:
+            return
         new_events = self.events[self._classified:]
         for event in new_events:
             agent = event.get("agent")
             if event["kind"] == "touch":
                 self.stats[agent]["touches"] += 1
                 sign = opponent_goal_sign(agent_team(agent))
-                if ball_heading_into_goal(ball.pos, ball.vel, sign):
+                if ball_heading_into_goal(ball_pos, ball_vel, sign):
                     self.events.append({"kind": "shot", "tick": event["tick"], "agent": agent})
                     self.stats[agent]["shots"] += 1
-                if (prev is not None and ball_heading_into_goal(prev.pos, prev.vel, -sign)
-                        and not ball_heading_into_goal(ball.pos, ball.vel, -sign)):
+                if (prev is not None and ball_heading_into_goal(prev[0], prev[1], -sign)
+                        and not ball_heading_into_goal(ball_pos, ball_vel, -sign)):
                     self.events.append({"kind": "save", "tick": event["tick"], "agent": agent})
                     self.stats[agent]["saves"] += 1
             elif event["kind"] == "demo":
                 self.stats[agent]["demos"] += 1
         self._classified = len(self.events)
-        self._ball_prev = ball
 
     def begin_decision(self, controls) -> None:
         self.goals_this_decision = []
