@@ -356,12 +356,17 @@ _FEATURE_MIRROR = np.concatenate([np.tile(MIRROR, 5), np.ones(5)])  # team frame
 def car_features(car: CarState | None) -> np.ndarray:
     """``CAR_FEATURES`` of one car in the blue (world) frame, zeros for an absent car; multiply by
     ``_FEATURE_MIRROR`` for orange's frame."""
+    features = np.zeros(len(CAR_FEATURES))
     if car is None:
-        return np.zeros(len(CAR_FEATURES))
-    return np.concatenate([
-        car.pos / POS_SCALE, car.vel / CAR_VEL_SCALE, car.ang_vel / CAR_ANG_VEL_SCALE,
-        car.rot_mat[:, 0], car.rot_mat[:, 2],
-        [car.boost / C.BOOST_MAX, float(car.on_ground), float(has_flip_available(car)), float(car.is_demoed), 1.0]])
+        return features
+    features[0:3] = car.pos / POS_SCALE
+    features[3:6] = car.vel / CAR_VEL_SCALE
+    features[6:9] = car.ang_vel / CAR_ANG_VEL_SCALE
+    features[9:12] = car.rot_mat[:, 0]
+    features[12:15] = car.rot_mat[:, 2]
+    features[15:20] = (car.boost / C.BOOST_MAX, float(car.on_ground), float(has_flip_available(car)),
+                       float(car.is_demoed), 1.0)
+    return features
 
 
 class TeamRelativeObs(ObsBuilder):
@@ -400,6 +405,7 @@ class TeamRelativeObs(ObsBuilder):
         self._cached_cars: dict[str, np.ndarray] = {}
         self._cached_sizes: tuple[int, int] | None = None
         self._cached_frames: dict[int, tuple] = {}
+        self._bounds: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # a space's bounds as float64
 
     @staticmethod
     @functools.lru_cache(maxsize=None)
@@ -423,6 +429,7 @@ class TeamRelativeObs(ObsBuilder):
             mates, opps = self.slots(blue_size, orange_size)
             low = _CAR_LOW + [-1.0] * len(BALL_FEATURES) + _CAR_LOW * (mates + opps) + [0.0] * N_PADS + _GAME_LOW
             self._spaces[key] = _box(low, [1.0] * len(low))
+            self._bounds[key] = (self._spaces[key].low.astype(np.float64), self._spaces[key].high.astype(np.float64))
         return self._spaces[key]
 
     def _team_sizes(self, state: GameState) -> tuple[int, int]:
@@ -452,32 +459,48 @@ class TeamRelativeObs(ObsBuilder):
             self._cached_state, self._cached_sizes = state, (blue_size, orange_size)
         if team not in self._cached_frames:
             self._cached_frames[team] = self._team_frame(team, state)
-        cars, ball_parts, timers = self._cached_frames[team]
+        cars, ball_block, timers = self._cached_frames[team]
         mates_n, opps_n = self.slots(blue_size, orange_size)
-        absent = np.zeros(len(CAR_FEATURES))
         own, other = TEAM_NAMES[team], TEAM_NAMES[1 - team]
         mates = [f"{own}_{i}" for i in range(own_size) if i != index]
         opps = [f"{other}_{i}" for i in range(other_size)]
-        parts = [cars.get(agent, absent), *ball_parts]
-        parts += [cars.get(name, absent) for name in mates] + [absent] * (mates_n - len(mates))
-        parts += [cars.get(name, absent) for name in opps] + [absent] * (opps_n - len(opps))
-        parts.append(timers)
+        self._make_space(blue_size, orange_size)
+        low, high = self._bounds[(blue_size, orange_size)]
+        # Filled block by block in the layout above; absent cars and unused slots stay zero.
+        out = np.zeros(len(low))
+        n_car = len(CAR_FEATURES)
+        at = 0
+        for name in [agent] + mates:
+            if name in cars:
+                out[at:at + n_car] = cars[name]
+            at += n_car
+            if name == agent:
+                out[at:at + len(ball_block)] = ball_block
+                at += len(ball_block)
+        at += n_car * (mates_n - len(mates))
+        for name in opps:
+            if name in cars:
+                out[at:at + n_car] = cars[name]
+            at += n_car
+        at += n_car * (opps_n - len(opps))
+        out[at:at + N_PADS] = timers
         own_score, other_score = state.score[team], state.score[1 - team]
-        parts.append([math.tanh((own_score - other_score) / SCORE_DIFF_SCALE), state.clock_s / CLOCK_SCALE_S,
-                      float(state.is_overtime), float(state.kickoff_pending)])
-        space = self._make_space(blue_size, orange_size)
-        return _finish(np.concatenate([np.asarray(p, dtype=np.float64).ravel() for p in parts]), space)
+        out[at + N_PADS:] = (math.tanh((own_score - other_score) / SCORE_DIFF_SCALE), state.clock_s / CLOCK_SCALE_S,
+                             float(state.is_overtime), float(state.kickoff_pending))
+        # _finish's clip and cast, with the bounds already in float64 (the same values)
+        return np.clip(out, low, high, out=out).astype(np.float32)
 
-    def _team_frame(self, team: int, state: GameState) -> tuple[dict[str, np.ndarray], list[np.ndarray], np.ndarray]:
-        """What every agent of ``team`` sees alike: car features, ball and pad timers in the team's frame."""
+    def _team_frame(self, team: int, state: GameState) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+        """What every agent of ``team`` sees alike: car features, the ball block and pad timers in the team's
+        frame."""
         sign = np.ones(3) if team == BLUE else MIRROR
         feature_sign = _FEATURE_MIRROR if team != BLUE else 1.0
         cars = {name: features * feature_sign for name, features in self._cached_cars.items()}
         ball = state.ball
-        ball_parts = [ball.pos * sign / POS_SCALE, ball.vel * sign / BALL_VEL_SCALE,
-                      ball.ang_vel * sign / BALL_ANG_VEL_SCALE]
+        ball_block = np.concatenate([ball.pos * sign / POS_SCALE, ball.vel * sign / BALL_VEL_SCALE,
+                                     ball.ang_vel * sign / BALL_ANG_VEL_SCALE])
         timers = np.asarray(state.pad_timers, dtype=np.float64) / PAD_COOLDOWN
-        return cars, ball_parts, timers if team == BLUE else timers[PAD_MIRROR]
+        return cars, ball_block, timers if team == BLUE else timers[PAD_MIRROR]
 
 
 # ================================================================= the seed's minigame sensors

@@ -47,11 +47,12 @@ class Car:
         b = self._batch
         b._read_state()
         k = self._k
-        cs = b.cs[k]
+        cs = b.cs[k].tolist()  # Python floats: indexing a list is far cheaper than NumPy scalars
         return _trusted(CarState, dict(
             pos=b.car_pos[k].copy(), vel=b.car_vel[k].copy(), ang_vel=b.car_ang_vel[k].copy(),
             rot_mat=b.car_rot[k].copy(), boost=float(cs[CS_BOOST]), on_ground=bool(cs[CS_ON_GROUND]),
-            wheels_in_contact=tuple(bool(cs[CS_WHEEL_0 + w]) for w in range(4)),
+            wheels_in_contact=(bool(cs[CS_WHEEL_0]), bool(cs[CS_WHEEL_0 + 1]), bool(cs[CS_WHEEL_0 + 2]),
+                               bool(cs[CS_WHEEL_0 + 3])),
             has_jumped=bool(cs[CS_HAS_JUMPED]), has_double_jumped=bool(cs[CS_HAS_DOUBLE_JUMPED]),
             has_flipped=bool(cs[CS_HAS_FLIPPED]), is_jumping=bool(cs[CS_IS_JUMPING]),
             is_flipping=bool(cs[CS_IS_FLIPPING]), is_supersonic=bool(cs[CS_IS_SUPERSONIC]),

@@ -70,6 +70,7 @@ class Rules(ABC):
         self._control_index = np.zeros(0, dtype=np.int64)
         self._control_matrix = np.zeros((0, len(_NEUTRAL_ROW)))
         self._neutral_matrix = self._control_matrix
+        self._applied_frozen: bool | None = None  # what apply_controls last wrote this decision (None: nothing)
         # Makes the arena on the first reset from a seed the episode's rng draws; None: a lone Arena(seed).
         # A vectorised env sets it to hand out the arenas of one ArenaBatch.
         self.arena_factory: Callable[[int], Arena] | None = None
@@ -162,11 +163,15 @@ class Rules(ABC):
             len(self.cars), len(_NEUTRAL_ROW))
         if len(self._neutral_matrix) != len(self.cars):
             self._neutral_matrix = np.tile(_NEUTRAL_ROW, (len(self.cars), 1))
+        self._applied_frozen = None
 
     def apply_controls(self) -> None:
         """Before each tick: the decision's controls, or neutral ones while the cars are frozen."""
         frozen = self.controls_frozen()
-        self.arena._batch.controls[self._control_index] = self._neutral_matrix if frozen else self._control_matrix
+        # Nothing else writes these rows during a decision, so they need writing only when they change.
+        if frozen != self._applied_frozen:
+            self.arena._batch.controls[self._control_index] = self._neutral_matrix if frozen else self._control_matrix
+            self._applied_frozen = frozen
 
     def end_tick(self, physics_events: list[tuple]) -> None:
         """After each tick: this arena's raw physics events (``ArenaBatch.events`` entries) become game events,

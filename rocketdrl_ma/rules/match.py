@@ -1,6 +1,8 @@
 """The full match: 1v1 to 4v4, clock, kickoff countdown, goals, overtime and the zero-second rule."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from rocketdrl_ma.physics import constants as C
@@ -15,6 +17,16 @@ BALL_ON_GROUND_Z = C.BALL_RADIUS + 5.0
 def opponent_goal_sign(team: int) -> float:
     """+1 if the team attacks the +y goal (blue), -1 for orange."""
     return 1.0 if team == BLUE else -1.0
+
+
+#: The centre of the goal each team attacks (the ``ball_velocity_to_goal`` target).
+_ATTACKED_GOAL_CENTER = {team: np.array([0.0, opponent_goal_sign(team) * (C.ARENA_EXTENT_Y + C.GOAL_DEPTH / 2),
+                                         C.GOAL_HEIGHT / 2]) for team in (BLUE, ORANGE)}
+
+
+def _norm(v: np.ndarray) -> float:
+    """``np.linalg.norm`` of a 3-vector, the same arithmetic (sqrt of ``v.dot(v)``) without its overhead."""
+    return math.sqrt(v.dot(v))
 
 
 class Match(Rules):
@@ -159,15 +171,14 @@ class Match(Rules):
 
     def reward_terms(self, agent: str, state: GameState) -> dict[str, float]:
         team = agent_team(agent)
-        sign = opponent_goal_sign(team)
         goal = sum(1.0 if scored == team else -1.0 for scored in self.goals_this_decision)
         car = state.cars[agent]
         ball = state.ball
-        to_goal = np.array([0.0, sign * (C.ARENA_EXTENT_Y + C.GOAL_DEPTH / 2), C.GOAL_HEIGHT / 2]) - ball.pos
-        ball_to_goal = float(ball.vel @ to_goal / (np.linalg.norm(to_goal) * C.BALL_MAX_SPEED))
+        to_goal = _ATTACKED_GOAL_CENTER[team] - ball.pos
+        ball_to_goal = float(ball.vel @ to_goal / (_norm(to_goal) * C.BALL_MAX_SPEED))
         to_ball = ball.pos - car.pos
-        dist = np.linalg.norm(to_ball)
+        dist = _norm(to_ball)
         player_to_ball = float(car.vel @ to_ball / (dist * C.CAR_MAX_SPEED)) if dist > 1e-6 else 0.0
         touched = any(e["kind"] == "touch" and e["agent"] == agent for e in state.events)
         return {"goal": goal, "touch": float(touched), "ball_velocity_to_goal": ball_to_goal,
-                "player_velocity_to_ball": player_to_ball, "boost": float(np.sqrt(car.boost / C.BOOST_MAX))}
+                "player_velocity_to_ball": player_to_ball, "boost": math.sqrt(car.boost / C.BOOST_MAX)}
