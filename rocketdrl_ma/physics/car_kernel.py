@@ -112,24 +112,47 @@ def _cross(a, b):
 
 
 @njit(cache=True)
+def _set_cross(a, b, out):
+    """out = a x b (``_cross`` without a new array; ``out`` must not be ``a`` or ``b``)."""
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+# The helpers below run several times per car and tick: they work on scalars (the arithmetic of
+# ``_mtv(R, _cross(...))`` and friends term by term) because a small array per step cost more than the maths.
+@njit(cache=True)
 def _inv_mass_along(R, inv_inertia, rel, direction):
     """1/m_eff of a unit impulse along ``direction`` applied at offset ``rel`` from the centre of mass."""
-    c = _mtv(R, _cross(rel, direction))
-    return 1.0 / C.CAR_MASS + inv_inertia[0] * c[0] ** 2 + inv_inertia[1] * c[1] ** 2 + inv_inertia[2] * c[2] ** 2
+    x = rel[1] * direction[2] - rel[2] * direction[1]
+    y = rel[2] * direction[0] - rel[0] * direction[2]
+    z = rel[0] * direction[1] - rel[1] * direction[0]
+    c0 = R[0, 0] * x + R[1, 0] * y + R[2, 0] * z
+    c1 = R[0, 1] * x + R[1, 1] * y + R[2, 1] * z
+    c2 = R[0, 2] * x + R[1, 2] * y + R[2, 2] * z
+    return 1.0 / C.CAR_MASS + inv_inertia[0] * c0 ** 2 + inv_inertia[1] * c1 ** 2 + inv_inertia[2] * c2 ** 2
 
 
 @njit(cache=True)
 def _apply_impulse(R, inv_inertia, v, w, rel, impulse):
-    v += impulse / C.CAR_MASS
-    w += _mv(R, inv_inertia * _mtv(R, _cross(rel, impulse)))
+    for j in range(3):
+        v[j] += impulse[j] / C.CAR_MASS
+    x = rel[1] * impulse[2] - rel[2] * impulse[1]
+    y = rel[2] * impulse[0] - rel[0] * impulse[2]
+    z = rel[0] * impulse[1] - rel[1] * impulse[0]
+    s0 = inv_inertia[0] * (R[0, 0] * x + R[1, 0] * y + R[2, 0] * z)
+    s1 = inv_inertia[1] * (R[0, 1] * x + R[1, 1] * y + R[2, 1] * z)
+    s2 = inv_inertia[2] * (R[0, 2] * x + R[1, 2] * y + R[2, 2] * z)
+    for j in range(3):
+        w[j] += R[j, 0] * s0 + R[j, 1] * s1 + R[j, 2] * s2
 
 
 @njit(cache=True)
 def _ray_sphere(origin, direction, center, radius):
     """Distance along a unit ray to a sphere, or -1 if missed (origins inside the sphere miss)."""
-    oc = origin - center
-    b = _dot(oc, direction)
-    c = _dot(oc, oc) - radius * radius
+    ox, oy, oz = origin[0] - center[0], origin[1] - center[1], origin[2] - center[2]
+    b = ox * direction[0] + oy * direction[1] + oz * direction[2]
+    c = (ox * ox + oy * oy + oz * oz) - radius * radius
     if c < 0.0:
         return -1.0
     disc = b * b - c
@@ -149,18 +172,31 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
     The order follows RocketSim's car update: wheel impulses are computed from the state at the start
     of the tick with last tick's steering and friction factors, then inputs act, then impulses apply.
     """
+    # Scratch reused by every car (reset per car where the model relies on zeros): fresh small arrays per car
+    # and wheel were most of this kernel's time.
+    fwd, right, up, down = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    v0, w0, v, w = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    hit = np.zeros(4, dtype=np.bool_)
+    hit_world = np.zeros(4, dtype=np.bool_)
+    hit_t = np.zeros(4)
+    hit_n = np.zeros((4, 3))
+    hard = np.zeros((4, 3))
+    susp_impulse = np.zeros((4, 3))
+    fric_impulse = np.zeros((4, 3))
+    fric_rel = np.zeros((4, 3))
+    rel, v_cp, axle, f_dir, cross = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     for i in range(pos.shape[0]):
         if not active[i] or cs[i, CS_IS_DEMOED] > 0.5:
             continue
         R = rot[i]
-        fwd = R[:, 0].copy()
-        right = R[:, 1].copy()
-        up = R[:, 2].copy()
+        for j in range(3):
+            fwd[j], right[j], up[j] = R[j, 0], R[j, 1], R[j, 2]
+            down[j] = -up[j]
         p = pos[i]
-        v0 = vel[i].copy()
-        w0 = ang_vel[i].copy()
-        v = v0.copy()
-        w = w0.copy()
+        v0[:] = vel[i]
+        w0[:] = ang_vel[i]
+        v[:] = v0
+        w[:] = w0
         throttle, steer = controls[i, 0], controls[i, 1]
         pitch_in, yaw_in, roll_in = controls[i, 2], controls[i, 3], controls[i, 4]
         jump = controls[i, 5] > 0.5
@@ -171,20 +207,24 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
 
         # ---- wheel rays against the arena (analytically) and this arena's ball
         bpos = ball_pos[car_arena[i]]
-        hit = np.zeros(4, dtype=np.bool_)
-        hit_world = np.zeros(4, dtype=np.bool_)
-        hit_t = np.zeros(4)
-        hit_n = np.zeros((4, 3))
-        hard = np.zeros((4, 3))
-        down = -up
+        hit[:] = False
+        hit_world[:] = False
+        hit_t[:] = 0.0
+        hit_n[:] = 0.0
+        hard[:] = 0.0
         for k in range(4):
-            hp = p + _mv(R, wheel_conn[i, k])
-            hard[k] = hp
+            c = wheel_conn[i, k]
+            hp = hard[k]
+            for j in range(3):
+                hp[j] = p[j] + (R[j, 0] * c[0] + R[j, 1] * c[1] + R[j, 2] * c[2])
             ok, t, nx, ny, nz = arena_raycast(hp[0], hp[1], hp[2], down[0], down[1], down[2], wheel_ray_len[i, k])
             tb = _ray_sphere(hp, down, bpos, ball_radius)
             if tb >= 0.0 and tb <= wheel_ray_len[i, k] and (not ok or tb < t):
-                n = hp + down * tb - bpos
-                hit_n[k] = n / np.sqrt(_dot(n, n))
+                for j in range(3):
+                    rel[j] = hp[j] + down[j] * tb - bpos[j]
+                norm = np.sqrt(_dot(rel, rel))
+                for j in range(3):
+                    hit_n[k, j] = rel[j] / norm
                 hit_t[k] = tb
                 hit[k] = True
             elif ok:
@@ -204,17 +244,20 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         cs[i, CS_WORLD_CONTACT] = 1.0 if num_world > 0 else 0.0
 
         # ---- suspension impulses, from the start-of-tick velocity
-        susp_impulse = np.zeros((4, 3))
+        susp_impulse[:] = 0.0
         for k in range(4):
             if not hit[k]:
                 continue
             n = hit_n[k]
-            rel = hard[k] + down * hit_t[k] - p
+            for j in range(3):
+                rel[j] = hard[k, j] + down[j] * hit_t[k] - p[j]
             rest = wheel_rest[i, k]
             susp_len = min(max(hit_t[k] - wheel_radius[i, k], rest - C.SUSPENSION_MAX_TRAVEL),
                            rest + C.SUSPENSION_MAX_TRAVEL)
             denom = _dot(n, down)
-            v_cp = v0 + _cross(w0, rel)
+            _set_cross(w0, rel, cross)
+            for j in range(3):
+                v_cp[j] = v0[j] + cross[j]
             if denom >= 0.1 or denom > -1e-3:
                 rel_vel = 0.0
                 clipped_inv = 10.0
@@ -230,28 +273,41 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
             gap = hit_t[k] - (wheel_ray_len[i, k] - wheel_radius[i, k])
             m_eff = 1.0 / _inv_mass_along(R, inv_i, rel, n)
             push = max(m_eff * (-0.2 * gap / dt - _dot(n, v_cp)), 0.0) * (1.0 / 1.5) / 4.0
-            susp_impulse[k] = n * (force * dt + push)
+            amount = force * dt + push
+            for j in range(3):
+                susp_impulse[k, j] = n[j] * amount
 
         # ---- tyre impulses, with last tick's steering, engine, brake and friction factors
-        fric_impulse = np.zeros((4, 3))
-        fric_rel = np.zeros((4, 3))
+        fric_impulse[:] = 0.0
+        fric_rel[:] = 0.0
         last_angle = cs[i, CS_STEER_ANGLE]
         cos_l, sin_l = np.cos(last_angle), np.sin(last_angle)
         for k in range(4):
             if not hit[k]:
                 continue
             n = hit_n[k]
-            cp = hard[k] + down * hit_t[k]
-            rel = cp - p
-            fric_rel[k] = rel - up * _dot(rel, up)  # applied in the centre-of-mass plane: no pitch from braking
-            axle = right * cos_l - fwd * sin_l if wheel_is_front[i, k] else right
-            axle = axle - n * _dot(axle, n)
+            for j in range(3):
+                rel[j] = hard[k, j] + down[j] * hit_t[k] - p[j]
+            along_up = _dot(rel, up)
+            for j in range(3):  # applied in the centre-of-mass plane: no pitch from braking
+                fric_rel[k, j] = rel[j] - up[j] * along_up
+            if wheel_is_front[i, k]:
+                for j in range(3):
+                    axle[j] = right[j] * cos_l - fwd[j] * sin_l
+            else:
+                axle[:] = right
+            along_n = _dot(axle, n)
+            for j in range(3):
+                axle[j] = axle[j] - n[j] * along_n
             a_len = np.sqrt(_dot(axle, axle))
             if a_len < 1e-9:
                 continue
-            axle /= a_len
-            f_dir = _cross(axle, n)
-            v_cp = v0 + _cross(w0, rel)
+            for j in range(3):
+                axle[j] /= a_len
+            _set_cross(axle, n, f_dir)
+            _set_cross(w0, rel, cross)
+            for j in range(3):
+                v_cp[j] = v0[j] + cross[j]
             m_lat = 1.0 / _inv_mass_along(R, inv_i, rel, axle)
             side = -0.2 * _dot(v_cp, axle) * m_lat
             engine = cs[i, CS_ENGINE]
@@ -262,8 +318,10 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
                 rolling = min(max(-_dot(v_cp, f_dir) * C.BRAKE_SLIP_SCALE, -b), b)
             else:
                 rolling = 0.0
-            fric_impulse[k] = (f_dir * (rolling * cs[i, CS_LONG_FRICTION_0 + k])
-                               + axle * (side * cs[i, CS_LAT_FRICTION_0 + k])) * (C.CAR_MASS / 3.0) * dt
+            long_amount = rolling * cs[i, CS_LONG_FRICTION_0 + k]
+            lat_amount = side * cs[i, CS_LAT_FRICTION_0 + k]
+            for j in range(3):
+                fric_impulse[k, j] = (f_dir[j] * long_amount + axle[j] * lat_amount) * (C.CAR_MASS / 3.0) * dt
 
         # ---- this tick's wheel set-up: throttle, brake, steering, friction factors; sticky force
         hb = cs[i, CS_HANDBRAKE]
@@ -297,13 +355,21 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
             if not hit[k]:
                 continue
             n = hit_n[k]
-            axle = right * cos_l - fwd * sin_l if wheel_is_front[i, k] else right
-            long_dir = _cross(axle, n)
-            v_hp = v0 + _cross(w0, hard[k] - p)
-            lat_speed = abs(_dot(v_hp, axle))
+            if wheel_is_front[i, k]:
+                for j in range(3):
+                    axle[j] = right[j] * cos_l - fwd[j] * sin_l
+            else:
+                axle[:] = right
+            _set_cross(axle, n, f_dir)  # the wheel's rolling direction
+            for j in range(3):
+                rel[j] = hard[k, j] - p[j]
+            _set_cross(w0, rel, cross)
+            for j in range(3):
+                v_cp[j] = v0[j] + cross[j]  # the velocity at the wheel's hard point
+            lat_speed = abs(_dot(v_cp, axle))
             slip = 0.0
             if lat_speed > 5.0:
-                slip = lat_speed / (abs(_dot(v_hp, long_dir)) + lat_speed)
+                slip = lat_speed / (abs(_dot(v_cp, f_dir)) + lat_speed)
             lat_fric = interp(_LAT_CURVE_3W if three_wheel[i] else _LAT_CURVE, slip)
             long_fric = 1.0
             if hb > 0.0:
@@ -441,7 +507,9 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         # ---- the wheel impulses computed at the start of the tick
         for k in range(4):
             if hit[k]:
-                _apply_impulse(R, inv_i, v, w, hard[k] + down * hit_t[k] - p, susp_impulse[k])
+                for j in range(3):
+                    rel[j] = hard[k, j] + down[j] * hit_t[k] - p[j]
+                _apply_impulse(R, inv_i, v, w, rel, susp_impulse[k])
         for k in range(4):
             if hit[k]:
                 _apply_impulse(R, inv_i, v, w, fric_rel[k], fric_impulse[k])
