@@ -57,6 +57,22 @@ def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty):
     return n_dirty
 
 
+@njit(cache=True)
+def post_tick_kernels(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen_pos, ball_dirty, car_pos, car_vel,
+                      car_ang_vel, car_arena, car_active, cs, pads_enabled, pad_timer, pad_picked, dt):
+    """The compiled after-step work of one tick in one call: ``ball_post_tick``, ``car_post_tick`` and, when pads are
+    enabled, ``boost_pad_tick``. Returns (balls to write back, cars due to respawn, pads picked up)."""
+    n_dirty = ball_post_tick(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen_pos, ball_dirty)
+    respawn_due = 0
+    n_picked = 0
+    if car_pos.shape[0] > 0:
+        respawn_due = car_post_tick(car_vel, car_ang_vel, car_active, cs, dt)
+        if pads_enabled:
+            n_picked = boost_pad_tick(car_pos, car_arena, car_active, cs, C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG,
+                                      pad_timer, pad_picked, dt)
+    return n_dirty, respawn_due, n_picked
+
+
 def mat_to_quat(m: np.ndarray) -> tuple[float, float, float, float]:
     """Rotation matrix to an xyzw quaternion (Shepperd's method)."""
     tr = m[0, 0] + m[1, 1] + m[2, 2]
@@ -291,11 +307,16 @@ class ArenaBatch:
             self._read_plan = (key, [self._ball_bodies[k] for k in balls] + self._car_bodies, targets)
         return self._read_plan[1], self._read_plan[2]
 
-    def _write_car_velocities(self) -> None:
+    def _write_car_velocities(self, all_writable: bool) -> None:
+        """Every active, non-demolished car's velocities to PyBullet (``all_writable``: that is every car)."""
         cid = self.client
         reset_velocity = pb.resetBaseVelocity
         vel = (self.car_vel * M_PER_UU).tolist()
         ang = self.car_ang_vel.tolist()
+        if all_writable:
+            for body, v, w in zip(self._car_bodies, vel, ang):
+                reset_velocity(body, v, w, cid)
+            return
         writable = (self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0)).tolist()
         for body, ok, v, w in zip(self._car_bodies, writable, vel, ang):
             if ok:
@@ -350,50 +371,51 @@ class ArenaBatch:
         for _ in range(ticks):
             self._read_state()
             if self._slots:
-                car_pre_tick(self.car_pos, self.car_rot, self.car_vel, self.car_ang_vel, self.controls,
-                             self.wheel_conn, self.wheel_rest, self.wheel_radius, self.wheel_ray_len,
-                             self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
-                             self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
-                self._write_car_velocities()
+                unwritable = car_pre_tick(self.car_pos, self.car_rot, self.car_vel, self.car_ang_vel, self.controls,
+                                          self.wheel_conn, self.wheel_rest, self.wheel_radius, self.wheel_ray_len,
+                                          self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
+                                          self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
+                self._write_car_velocities(unwritable == 0)
             frozen = self.ball_frozen.nonzero()[0].tolist()
             if frozen:
                 self._hold_frozen_balls(frozen)
-            # RocketSim scores a car's touch from the velocities at contact, before the solver resolves it.
-            self._pre_step = (self.car_pos.copy(), self.car_vel.copy(), self.ball_pos.copy(), self.ball_vel.copy())
             step_simulation(cid)
             self.tick_count += 1
+            touches, car_pairs = self._classify_contacts(pb.getContactPoints(physicsClientId=cid))
+            if touches or car_pairs:
+                # RocketSim scores a car's touch from the velocities at contact, before the solver resolves it:
+                # the arrays still hold them until the read below.
+                self._pre_step = (self.car_pos.copy(), self.car_vel.copy(), self.ball_pos.copy(),
+                                  self.ball_vel.copy())
             self._read_bodies(*self._read_plan_for(self.ball_frozen))
             self._state_fresh = True
+            if touches or car_pairs:
+                self._hits(touches, car_pairs)
             self._post_tick()
 
     def _post_tick(self) -> None:
-        contacts = pb.getContactPoints(physicsClientId=self.client)
-        if contacts:
-            self._contacts(contacts)
-        if ball_post_tick(self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos,
-                          self._ball_dirty):
+        n_dirty, respawn_due, picked = post_tick_kernels(
+            self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos, self._ball_dirty,
+            self.car_pos, self.car_vel, self.car_ang_vel, self.car_arena, self.car_active, self.cs,
+            self.boost_pads_enabled, self.pad_timer, self.pad_picked, self.dt)
+        if n_dirty:
             for k in self._ball_dirty.nonzero()[0].tolist():
                 self._write_ball(k)
-        if self._slots:
-            respawn_due = car_post_tick(self.car_vel, self.car_ang_vel, self.car_active, self.cs, self.dt)
-            picked = 0
-            if self.boost_pads_enabled:
-                picked = boost_pad_tick(self.car_pos, self.car_arena, self.car_active, self.cs,
-                                        C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG, self.pad_timer, self.pad_picked,
-                                        self.dt)
-            if picked:
-                for k in np.flatnonzero(self.pad_picked >= 0):
-                    self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id,
-                                        int(self.pad_picked[k])))
-            if respawn_due:
-                for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
-                    if self.cs[k, CS_DEMO_TIMER] <= 0.0:
-                        self.respawn(self._slots[k].car_id)
+        if picked:
+            for k in np.flatnonzero(self.pad_picked >= 0):
+                self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id, int(self.pad_picked[k])))
+        if respawn_due:
+            for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
+                if self.cs[k, CS_DEMO_TIMER] <= 0.0:
+                    self.respawn(self._slots[k].car_id)
 
-    def _contacts(self, contacts: tuple) -> None:
-        """This tick's contact points: ball touches, car-car hits, hitboxes touching the arena."""
+    def _classify_contacts(self, contacts: tuple) -> tuple[set[tuple[int, int]], dict[tuple[int, int], tuple]]:
+        """This tick's contact points as ball touches {(car body, arena)} and car-car hits {(body a, body b): contact
+        points}; a hitbox touching the arena is recorded for auto-flip and auto-roll here."""
         touches: set[tuple[int, int]] = set()
         car_pairs: dict[tuple[int, int], tuple] = {}
+        if not contacts:
+            return touches, car_pairs
         ball_arena, slot_by_body = self._ball_arena, self._slot_by_body
         for c in contacts:
             a, b = c[1], c[2]
@@ -410,6 +432,11 @@ class ArenaBatch:
                 if slot is not None:
                     self.cs[slot.index, CS_BODY_CONTACT] = 1.0
                     self.cs[slot.index, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3] = np.multiply(c[7], sign)
+        return touches, car_pairs
+
+    def _hits(self, touches: set[tuple[int, int]], car_pairs: dict[tuple[int, int], tuple]) -> None:
+        """Ball hits and car-car bumps or demolitions of this tick's contacts, after the bodies were read."""
+        slot_by_body = self._slot_by_body
         for body, k in sorted(touches):
             if self.ball_frozen[k]:  # the tick's read skipped it: its state after the step is needed now
                 self.ball_frozen[k] = False

@@ -171,6 +171,8 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
     ``controls`` is (N, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake.
     The order follows RocketSim's car update: wheel impulses are computed from the state at the start
     of the tick with last tick's steering and friction factors, then inputs act, then impulses apply.
+
+    Returns how many cars' velocities must not be written back to PyBullet (inactive or demolished ones).
     """
     # Scratch reused by every car (reset per car where the model relies on zeros): fresh small arrays per car
     # and wheel were most of this kernel's time.
@@ -185,7 +187,10 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
     fric_impulse = np.zeros((4, 3))
     fric_rel = np.zeros((4, 3))
     rel, v_cp, axle, f_dir, cross = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    n_unwritable = 0
     for i in range(pos.shape[0]):
+        if not active[i] or cs[i, CS_IS_DEMOED] != 0.0:
+            n_unwritable += 1
         if not active[i] or cs[i, CS_IS_DEMOED] > 0.5:
             continue
         R = rot[i]
@@ -530,6 +535,7 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         cs[i, CS_LAST_JUMP] = 1.0 if jump else 0.0
         vel[i] = v
         ang_vel[i] = w
+    return n_unwritable
 
 
 @njit(cache=True)
