@@ -351,6 +351,10 @@ _GAME_LOW = [-1.0, 0.0, 0.0, 0.0]
 
 
 _FEATURE_MIRROR = np.concatenate([np.tile(MIRROR, 5), np.ones(5)])  # team frame of CAR_FEATURES for orange
+# The divisors of the first 15 car features and of the ball block (1.0 for direction vectors: an exact no-op).
+_CAR_SCALE = np.concatenate([POS_SCALE, [CAR_VEL_SCALE] * 3, [CAR_ANG_VEL_SCALE] * 3, np.ones(6)])
+_BALL_SCALE = np.concatenate([POS_SCALE, [BALL_VEL_SCALE] * 3, [BALL_ANG_VEL_SCALE] * 3])
+_BALL_MIRROR = np.tile(MIRROR, 3)
 
 
 def car_features(car: CarState | None) -> np.ndarray:
@@ -359,11 +363,8 @@ def car_features(car: CarState | None) -> np.ndarray:
     features = np.zeros(len(CAR_FEATURES))
     if car is None:
         return features
-    features[0:3] = car.pos / POS_SCALE
-    features[3:6] = car.vel / CAR_VEL_SCALE
-    features[6:9] = car.ang_vel / CAR_ANG_VEL_SCALE
-    features[9:12] = car.rot_mat[:, 0]
-    features[12:15] = car.rot_mat[:, 2]
+    np.divide(np.concatenate((car.pos, car.vel, car.ang_vel, car.rot_mat[:, 0], car.rot_mat[:, 2])), _CAR_SCALE,
+              out=features[:15])
     features[15:20] = (car.boost / C.BOOST_MAX, float(car.on_ground), float(has_flip_available(car)),
                        float(car.is_demoed), 1.0)
     return features
@@ -406,6 +407,7 @@ class TeamRelativeObs(ObsBuilder):
         self._cached_sizes: tuple[int, int] | None = None
         self._cached_frames: dict[int, tuple] = {}
         self._bounds: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # a space's bounds as float64
+        self._layouts: dict[tuple[str, int, int], tuple] = {}  # see _layout
 
     @staticmethod
     @functools.lru_cache(maxsize=None)
@@ -441,13 +443,37 @@ class TeamRelativeObs(ObsBuilder):
             sizes[team] = max(sizes[team], int(name.rsplit("_", 1)[1]) + 1)
         return sizes[0], sizes[1]
 
+    def _layout(self, agent: str, blue_size: int, orange_size: int) -> tuple[tuple[tuple[int, str], ...], int, int]:
+        """Where ``agent``'s observation puts each car's block (offset, car), the ball block and the pad timers
+        (the game features follow them); worked out and validated once per agent and team sizes."""
+        key = (agent, blue_size, orange_size)
+        if key not in self._layouts:
+            team = agent_team(agent)
+            own_size, other_size = (blue_size, orange_size) if team == BLUE else (orange_size, blue_size)
+            index = int(agent.rsplit("_", 1)[1])
+            if not 0 <= index < own_size:
+                raise ValueError(f"agent: {agent!r} is not in a {blue_size}v{orange_size} game")
+            self._make_space(blue_size, orange_size)
+            mates_n, opps_n = self.slots(blue_size, orange_size)
+            own, other = TEAM_NAMES[team], TEAM_NAMES[1 - team]
+            n_car = len(CAR_FEATURES)
+            slots = [(0, agent)]
+            at = n_car + len(BALL_FEATURES)
+            for i in [i for i in range(own_size) if i != index]:
+                slots.append((at, f"{own}_{i}"))
+                at += n_car
+            at += n_car * (mates_n - (own_size - 1))
+            for i in range(other_size):
+                slots.append((at, f"{other}_{i}"))
+                at += n_car
+            at += n_car * (opps_n - other_size)
+            self._layouts[key] = (tuple(slots), n_car, at)
+        return self._layouts[key]
+
     def build(self, agent: str, state: GameState) -> np.ndarray:
         team = agent_team(agent)
         blue_size, orange_size = self._team_sizes(state)
-        own_size, other_size = (blue_size, orange_size) if team == BLUE else (orange_size, blue_size)
-        index = int(agent.rsplit("_", 1)[1])
-        if not 0 <= index < own_size:
-            raise ValueError(f"agent: {agent!r} is not in a {blue_size}v{orange_size} game")
+        car_slots, ball_at, pads_at = self._layout(agent, blue_size, orange_size)
         # Every agent of one decision shares the per-car features and the team frames' blocks.
         if self._cached_state is not state or self._cached_sizes != (blue_size, orange_size):
             for name in state.cars:
@@ -460,32 +486,18 @@ class TeamRelativeObs(ObsBuilder):
         if team not in self._cached_frames:
             self._cached_frames[team] = self._team_frame(team, state)
         cars, ball_block, timers = self._cached_frames[team]
-        mates_n, opps_n = self.slots(blue_size, orange_size)
-        own, other = TEAM_NAMES[team], TEAM_NAMES[1 - team]
-        mates = [f"{own}_{i}" for i in range(own_size) if i != index]
-        opps = [f"{other}_{i}" for i in range(other_size)]
-        self._make_space(blue_size, orange_size)
         low, high = self._bounds[(blue_size, orange_size)]
         # Filled block by block in the layout above; absent cars and unused slots stay zero.
         out = np.zeros(len(low))
         n_car = len(CAR_FEATURES)
-        at = 0
-        for name in [agent] + mates:
-            if name in cars:
-                out[at:at + n_car] = cars[name]
-            at += n_car
-            if name == agent:
-                out[at:at + len(ball_block)] = ball_block
-                at += len(ball_block)
-        at += n_car * (mates_n - len(mates))
-        for name in opps:
-            if name in cars:
-                out[at:at + n_car] = cars[name]
-            at += n_car
-        at += n_car * (opps_n - len(opps))
-        out[at:at + N_PADS] = timers
+        for at, name in car_slots:
+            features = cars.get(name)
+            if features is not None:
+                out[at:at + n_car] = features
+        out[ball_at:ball_at + len(BALL_FEATURES)] = ball_block
+        out[pads_at:pads_at + N_PADS] = timers
         own_score, other_score = state.score[team], state.score[1 - team]
-        out[at + N_PADS:] = (math.tanh((own_score - other_score) / SCORE_DIFF_SCALE), state.clock_s / CLOCK_SCALE_S,
+        out[pads_at + N_PADS:] = (math.tanh((own_score - other_score) / SCORE_DIFF_SCALE), state.clock_s / CLOCK_SCALE_S,
                              float(state.is_overtime), float(state.kickoff_pending))
         # _finish's clip and cast, with the bounds already in float64 (the same values)
         return np.clip(out, low, high, out=out).astype(np.float32)
@@ -493,14 +505,13 @@ class TeamRelativeObs(ObsBuilder):
     def _team_frame(self, team: int, state: GameState) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
         """What every agent of ``team`` sees alike: car features, the ball block and pad timers in the team's
         frame."""
-        sign = np.ones(3) if team == BLUE else MIRROR
-        feature_sign = _FEATURE_MIRROR if team != BLUE else 1.0
-        cars = {name: features * feature_sign for name, features in self._cached_cars.items()}
         ball = state.ball
-        ball_block = np.concatenate([ball.pos * sign / POS_SCALE, ball.vel * sign / BALL_VEL_SCALE,
-                                     ball.ang_vel * sign / BALL_ANG_VEL_SCALE])
+        ball_block = np.concatenate((ball.pos, ball.vel, ball.ang_vel))
         timers = np.asarray(state.pad_timers, dtype=np.float64) / PAD_COOLDOWN
-        return cars, ball_block, timers if team == BLUE else timers[PAD_MIRROR]
+        if team == BLUE:  # the world frame: the features as they are (build copies them into its output)
+            return self._cached_cars, ball_block / _BALL_SCALE, timers
+        cars = {name: features * _FEATURE_MIRROR for name, features in self._cached_cars.items()}
+        return cars, ball_block * _BALL_MIRROR / _BALL_SCALE, timers[PAD_MIRROR]
 
 
 # ================================================================= the seed's minigame sensors

@@ -44,10 +44,13 @@ class CarControls:
     handbrake: bool = False
 
     def __post_init__(self) -> None:
-        for name in ("throttle", "steer", "pitch", "yaw", "roll"):
-            setattr(self, name, _axis(name, getattr(self, name)))
-        for name in ("jump", "boost", "handbrake"):
-            setattr(self, name, bool(getattr(self, name)))
+        # Field by field rather than a loop over names: controls are made for every agent and decision.
+        self.throttle = _axis("throttle", self.throttle)
+        self.steer = _axis("steer", self.steer)
+        self.pitch = _axis("pitch", self.pitch)
+        self.yaw = _axis("yaw", self.yaw)
+        self.roll = _axis("roll", self.roll)
+        self.jump, self.boost, self.handbrake = bool(self.jump), bool(self.boost), bool(self.handbrake)
 
     def as_array(self) -> np.ndarray:
         return np.array([self.throttle, self.steer, self.pitch, self.yaw, self.roll,
