@@ -73,6 +73,14 @@ def post_tick_kernels(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen
     return n_dirty, respawn_due, n_picked
 
 
+@njit(cache=True)
+def hold_frozen_arrays(frozen, ball_pos, ball_vel, frozen_pos, hold_vel):
+    """Frozen balls ``frozen`` (indices) back at their place with the velocity that cancels a tick's gravity."""
+    for k in frozen:
+        ball_pos[k] = frozen_pos[k]
+        ball_vel[k] = hold_vel
+
+
 def mat_to_quat(m: np.ndarray) -> tuple[float, float, float, float]:
     """Rotation matrix to an xyzw quaternion (Shepperd's method)."""
     tr = m[0, 0] + m[1, 1] + m[2, 2]
@@ -331,14 +339,13 @@ class ArenaBatch:
         pb.resetBaseVelocity(body, (self.ball_vel[k] * M_PER_UU).tolist(), self.ball_ang_vel[k].tolist(),
                              physicsClientId=cid)
 
-    def _hold_frozen_balls(self, frozen: list[int]) -> None:
+    def _hold_frozen_balls(self, frozen: np.ndarray) -> None:
         """Put every frozen ball back in place with a velocity that cancels this tick's gravity, so it stays
         exactly where it is (the arithmetic of ``_write_ball``, done once when the ball was frozen)."""
         cid = self.client
         reset_pose, reset_velocity = pb.resetBasePositionAndOrientation, pb.resetBaseVelocity
-        for k in frozen:
-            self.ball_pos[k] = self._ball_frozen_pos[k]
-            self.ball_vel[k] = self._ball_hold_vel
+        hold_frozen_arrays(frozen, self.ball_pos, self.ball_vel, self._ball_frozen_pos, self._ball_hold_vel)
+        for k in frozen.tolist():
             body = self._ball_bodies[k]
             reset_pose(body, self._ball_hold_pos_m[k], (0, 0, 0, 1), cid)
             reset_velocity(body, self._ball_hold_vel_m, self.ball_ang_vel[k].tolist(), cid)
@@ -376,8 +383,8 @@ class ArenaBatch:
                                           self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
                                           self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
                 self._write_car_velocities(unwritable == 0)
-            frozen = self.ball_frozen.nonzero()[0].tolist()
-            if frozen:
+            frozen = self.ball_frozen.nonzero()[0]
+            if len(frozen):
                 self._hold_frozen_balls(frozen)
             step_simulation(cid)
             self.tick_count += 1

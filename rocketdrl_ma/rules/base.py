@@ -176,7 +176,8 @@ class Rules(ABC):
     def end_tick(self, physics_events: list[tuple]) -> None:
         """After each tick: this arena's raw physics events (``ArenaBatch.events`` entries) become game events,
         then the mode's per-tick logic runs."""
-        self._collect_physics_events(physics_events)
+        if physics_events or self._touching:  # otherwise there is nothing to collect and no contact to end
+            self._collect_physics_events(physics_events)
         self.on_tick()
 
     def _collect_physics_events(self, physics_events: list[tuple]) -> None:
