@@ -144,15 +144,17 @@ class RocketDRLParallelEnv(ParallelEnv):
         # Actions for agents no longer in the game are ignored (torchrl sends them for finished agents).
         return {agent: self.action_parser.parse(agent, actions[agent], self._state) for agent in self.agents}
 
-    def _end_decision(self):
-        """Everything a step returns, once the rules have run the decision's ticks (shared with VectorEnv)."""
+    def _end_decision(self, observe: bool = True):
+        """Everything a step returns, once the rules have run the decision's ticks (shared with VectorEnv, which
+        builds the observations of all its lanes at once when it can: ``observe=False`` leaves them out)."""
         self._cycles += 1
         state = self._state = self.rules.game_state()
         terminated = self.rules.is_terminated()
         truncated = self.rules.is_truncated() or (self.max_cycles is not None and self._cycles >= self.max_cycles)
         observations, rewards, infos = {}, {}, {}
         for agent in self.agents:
-            observations[agent] = self.obs_builder.build(agent, state)
+            if observe:
+                observations[agent] = self.obs_builder.build(agent, state)
             rewards[agent], terms = self.rules.weighted_rewards(agent, state)
             infos[agent] = self._info(agent, state, terms)
         if (terminated or truncated) and self.info_format == "full":

@@ -19,6 +19,8 @@ from gymnasium import spaces
 
 from rocketdrl_ma.physics import Arena, ArenaBatch
 
+from .batched_obs import BatchedTeamRelativeObs
+from .observations import TeamRelativeObs
 from .parallel_env import RocketDRLParallelEnv
 
 
@@ -51,6 +53,11 @@ class VectorEnv:
         self.observation_space: spaces.Box = first.observation_space(self.possible_agents[0])
         self.action_space: spaces.Space = first.action_space(self.possible_agents[0])
         self._obs = np.zeros((n_arenas, self.n_agents) + self.observation_space.shape, np.float32)
+        # The team-relative observation (the common one) is built for every lane at once from the batch arrays.
+        self._batched_obs = None
+        if type(first.obs_builder) is TeamRelativeObs:
+            self._batched_obs = BatchedTeamRelativeObs(first.obs_builder, self.possible_agents, first.rules.blue_size,
+                                                       first.rules.orange_size)
         self._live = np.zeros(n_arenas, dtype=bool)
         self.final_obs = self._obs.copy()
 
@@ -98,14 +105,18 @@ class VectorEnv:
         terminated = np.zeros(self.n_arenas, dtype=bool)
         truncated = np.zeros(self.n_arenas, dtype=bool)
         infos = []
+        observe = self._batched_obs is None
         for k, lane in enumerate(self.lanes):
-            obs, rew, term, trunc, info = lane._end_decision()
+            obs, rew, term, trunc, info = lane._end_decision(observe=observe)
             for j, agent in enumerate(self.possible_agents):
-                self._obs[k, j] = obs[agent]
+                if observe:
+                    self._obs[k, j] = obs[agent]
                 rewards[k, j] = rew[agent]
             first = self.possible_agents[0]
             terminated[k], truncated[k] = term[first], trunc[first]
             infos.append(info)
+        if not observe:
+            self._obs[:] = self._all_observations()
         final_obs = self._obs.copy()
         done = terminated | truncated
         self._live &= ~done
@@ -114,6 +125,16 @@ class VectorEnv:
                 self._reset_lane(int(k), None)
         self.final_obs = final_obs
         return self._obs.copy(), rewards, terminated, truncated, infos
+
+    def _all_observations(self) -> np.ndarray:
+        """Every lane's observations of its state after this decision, built at once from the batch arrays."""
+        states = [lane.game_state for lane in self.lanes]
+        car_rows = np.array([[lane.rules.cars[agent]._k for agent in self.possible_agents] for lane in self.lanes])
+        batched = self._batched_obs.build(self.batch, car_rows, states)
+        if batched is None:  # a car is missing from a state: the reference builder, agent by agent
+            batched = [[lane.obs_builder.build(agent, state) for agent in self.possible_agents]
+                       for lane, state in zip(self.lanes, states)]
+        return batched
 
     def _run_ticks(self) -> None:
         batch, lanes = self.batch, self.lanes
