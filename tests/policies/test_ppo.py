@@ -5,6 +5,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +18,7 @@ from rocketdrl_ma.cli import main
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.policies.ppo import load_model, train, validate_train_config
 from rocketdrl_ma.policies.ppo.envs import EnvPool
+from rocketdrl_ma.policies.ppo.evaluate import evaluate
 from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.ppo.shaping import potential
 from rocketdrl_ma.policies.ppo.trainer import make_loss, ppo_update
@@ -88,6 +90,25 @@ def test_short_training_run_writes_a_checkpoint_that_loads_acts_and_resumes(tmp_
     assert torch.equal(more.obs_norm.count, model.obs_norm.count + 1024)
 
     assert main(["eval", str(out), "--episodes", "2", "--n-envs", "1"]) == 0
+
+
+def test_evaluation_takes_each_copys_first_episodes():
+    """Not whichever episodes end first: a goal ends a minigame episode early, so that would favour successes."""
+    checkpoint = Path(__file__).resolve().parents[2] / "policies" / "checkpoints" / "penalty_tuned.pt"
+    model, meta = load_model(checkpoint)
+    result = evaluate(checkpoint, episodes=3, seed=51, n_envs=2)  # copy 1 ends its second episode first
+    expected = []
+    for copy, quota in ((0, 2), (1, 1)):  # copy k of a pool seeded s plays what a lone copy seeded s + k plays
+        pool = EnvPool(meta["env"]["config"], 1, 51 + copy, meta["env"]["overrides"])
+        obs, finished = pool.reset(), []
+        while len(finished) < quota:
+            step = pool.step(model.act_deterministic(obs))
+            obs, finished = step.obs, finished + step.episodes
+        pool.close()
+        expected += finished[:quota]
+    assert result.episodes == 3
+    assert result.mean_length == np.mean([e.length for e in expected])
+    assert result.mean_return == pytest.approx(np.mean([e.agent_return for e in expected]))
 
 
 def test_update_lowers_the_loss_on_a_toy_batch():

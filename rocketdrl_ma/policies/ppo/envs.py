@@ -28,6 +28,7 @@ class Episode:
     agent_return: float
     length: int
     success: bool
+    copy: int  # the env copy that played it
 
 
 def episode_success(agent: str, info: dict) -> bool:
@@ -106,7 +107,7 @@ class EnvPool:
             for k, agent in enumerate(self.agents):
                 row = rows.start + k
                 episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
-                                        episode_success(agent, infos[i][agent])))
+                                        episode_success(agent, infos[i][agent]), int(i)))
         if ended.any():
             new_obs, _ = self.vec.reset_arenas(ended)
             for i in np.flatnonzero(ended):

@@ -28,14 +28,19 @@ def evaluate(checkpoint: str | Path, episodes: int, seed: int = 10_000, n_envs: 
     model, meta = load_model(checkpoint)
     env = meta["env"]
     pool = EnvPool(env["config"], n_envs, seed, {**env["overrides"], **(overrides or {})})
-    finished = []
+    # Each copy plays a fixed quota of its first episodes: keeping whichever episodes end first would favour
+    # short ones, and in a minigame a goal ends an episode sooner than a timeout.
+    quota = [episodes // n_envs + (copy < episodes % n_envs) for copy in range(n_envs)]
+    finished: list = []
     obs = pool.reset()
-    while len(finished) < episodes:
+    while any(quota):
         step = pool.step(model.act_deterministic(obs))
         obs = step.obs
-        finished.extend(step.episodes)
+        for episode in step.episodes:
+            if quota[episode.copy]:
+                quota[episode.copy] -= 1
+                finished.append(episode)
     pool.close()
-    finished = finished[:episodes]
     return EvalResult(len(finished), float(np.mean([e.success for e in finished])),
                       float(np.mean([e.agent_return for e in finished])),
                       float(np.mean([e.length for e in finished])))

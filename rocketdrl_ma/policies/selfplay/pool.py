@@ -199,7 +199,7 @@ class SelfPlayPool:
                 for k, agent in enumerate(learners):
                     row = rows.start + k
                     episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
-                                            winner == team))
+                                            winner == team, i))
                 o, _ = env.reset()
                 obs[rows] = self._start_episode(i, o)
         done = terminated | truncated
