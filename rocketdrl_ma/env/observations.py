@@ -497,8 +497,8 @@ class TeamRelativeObs(ObsBuilder):
         out[ball_at:ball_at + len(BALL_FEATURES)] = ball_block
         out[pads_at:pads_at + N_PADS] = timers
         own_score, other_score = state.score[team], state.score[1 - team]
-        out[pads_at + N_PADS:] = (math.tanh((own_score - other_score) / SCORE_DIFF_SCALE), state.clock_s / CLOCK_SCALE_S,
-                             float(state.is_overtime), float(state.kickoff_pending))
+        out[pads_at + N_PADS:] = (math.tanh((own_score - other_score) / SCORE_DIFF_SCALE),
+                                  state.clock_s / CLOCK_SCALE_S, float(state.is_overtime), float(state.kickoff_pending))
         # _finish's clip and cast, with the bounds already in float64 (the same values)
         return np.clip(out, low, high, out=out).astype(np.float32)
 
