@@ -9,7 +9,7 @@ from rocketdrl_ma.physics import constants as C
 
 from .base import Rules, ball_heading_into_goal
 from .mutators import KickoffMutator
-from .state import BLUE, ORANGE, TEAM_NAMES, GameState, agent_team
+from .state import ATTACKED_GOAL_CENTER, BLUE, ORANGE, TEAM_NAMES, GameState, agent_team
 
 BALL_ON_GROUND_Z = C.BALL_RADIUS + 5.0
 
@@ -17,11 +17,6 @@ BALL_ON_GROUND_Z = C.BALL_RADIUS + 5.0
 def opponent_goal_sign(team: int) -> float:
     """+1 if the team attacks the +y goal (blue), -1 for orange."""
     return 1.0 if team == BLUE else -1.0
-
-
-#: The centre of the goal each team attacks (the ``ball_velocity_to_goal`` target).
-_ATTACKED_GOAL_CENTER = {team: np.array([0.0, opponent_goal_sign(team) * (C.ARENA_EXTENT_Y + C.GOAL_DEPTH / 2),
-                                         C.GOAL_HEIGHT / 2]) for team in (BLUE, ORANGE)}
 
 
 def _norm(v: np.ndarray) -> float:
@@ -174,7 +169,7 @@ class Match(Rules):
         goal = sum(1.0 if scored == team else -1.0 for scored in self.goals_this_decision)
         car = state.cars[agent]
         ball = state.ball
-        to_goal = _ATTACKED_GOAL_CENTER[team] - ball.pos
+        to_goal = ATTACKED_GOAL_CENTER[team] - ball.pos
         ball_to_goal = float(ball.vel @ to_goal / (_norm(to_goal) * C.BALL_MAX_SPEED))
         to_ball = ball.pos - car.pos
         dist = _norm(to_ball)

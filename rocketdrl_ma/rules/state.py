@@ -7,9 +7,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rocketdrl_ma.physics import BallState, CarConfig, CarControls, CarState
+from rocketdrl_ma.physics import constants as C
 
 BLUE, ORANGE = 0, 1
 TEAM_NAMES = ("blue", "orange")
+#: The centre of the goal each team attacks (blue attacks +y), in uu: the target of the goal-directed reward and
+#: shaping terms. Shared arrays: read, never modify.
+ATTACKED_GOAL_CENTER = {team: np.array([0.0, (1.0 if team == BLUE else -1.0) * (C.ARENA_EXTENT_Y + C.GOAL_DEPTH / 2),
+                                        C.GOAL_HEIGHT / 2]) for team in (BLUE, ORANGE)}
 
 
 @functools.lru_cache(maxsize=256)  # observations ask it for every car of every agent's view each decision

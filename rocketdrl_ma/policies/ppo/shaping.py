@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rocketdrl_ma.physics import constants as C
-from rocketdrl_ma.rules.state import BLUE, GameState, agent_team
+from rocketdrl_ma.rules.state import ATTACKED_GOAL_CENTER, GameState, agent_team
 
 SHAPING_TERMS = ("car_to_ball", "ball_to_goal")
 DISTANCE_SCALE_UU = 1000.0
@@ -39,7 +38,6 @@ def potential(agent: str, state: GameState, weights: dict[str, float]) -> float:
     if weights.get("car_to_ball") and car is not None:
         value -= weights["car_to_ball"] * np.linalg.norm(state.ball.pos - car.pos) / DISTANCE_SCALE_UU
     if weights.get("ball_to_goal"):
-        sign = 1.0 if agent_team(agent) == BLUE else -1.0
-        goal = np.array([0.0, sign * (C.ARENA_EXTENT_Y + C.GOAL_DEPTH / 2.0), C.GOAL_HEIGHT / 2.0])
+        goal = ATTACKED_GOAL_CENTER[agent_team(agent)]
         value -= weights["ball_to_goal"] * np.linalg.norm(goal - state.ball.pos) / DISTANCE_SCALE_UU
     return float(value)
