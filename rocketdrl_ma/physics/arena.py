@@ -219,13 +219,19 @@ class Arena:
         return None
 
     def add_static_box(self, center: np.ndarray, half_extents: np.ndarray) -> int:
-        """A fixed axis-aligned box (uu) the cars and the ball bounce off, e.g. a minigame barrier; returns its id."""
-        _check_inside("center", _box_vector("center", center), 0.0)
-        return self._batch.add_static_box(self.index, center, half_extents)
+        """A fixed axis-aligned box (uu) the cars and the ball bounce off, e.g. a minigame barrier; returns its id.
+
+        The centre of its top face must be inside the arena; the rest may reach into the floor (a low wall is
+        a tall box sunk into it)."""
+        half = _box_vector("half_extents", half_extents)
+        _check_inside("center + top half extent", _box_vector("center", center) + [0.0, 0.0, half[2]], 0.0)
+        return self._batch.add_static_box(self.index, center, half)
 
     def move_static_box(self, box_id: int, center: np.ndarray) -> None:
-        """Move a static box (between rounds: it teleports, it does not push what is in the way)."""
-        _check_inside("center", _box_vector("center", center), 0.0)
+        """Move a static box (between rounds: it teleports, it does not push what is in the way); as in
+        ``add_static_box``, the centre of its top face must be inside the arena."""
+        top = _box_vector("center", center) + [0.0, 0.0, self._batch.static_box_half_extents(box_id)[2]]
+        _check_inside("center + top half extent", top, 0.0)
         self._batch.move_static_box(box_id, center)
 
     def remove_static_box(self, box_id: int) -> None:

@@ -149,6 +149,7 @@ class ArenaBatch:
                                   (k // ARENA_GRID_COLUMNS) * ARENA_SPACING_UU, 0.0] for k in range(n_arenas)])
         self._build_static_world()
         self._static_boxes: dict[int, int] = {}  # PyBullet body id -> arena index
+        self._static_half_extents: dict[int, np.ndarray] = {}  # PyBullet body id -> half extents (uu)
         self._ball_bodies = [self._make_ball(k) for k in range(n_arenas)]
         self.ball_pos = np.zeros((n_arenas, 3))
         self.ball_vel = np.zeros((n_arenas, 3))
@@ -556,7 +557,12 @@ class ArenaBatch:
                           spinningFriction=0.0, physicsClientId=cid)
         self._static_set.add(body)  # cars touching it count as touching the arena (auto-flip, auto-roll)
         self._static_boxes[body] = int(arena)
+        self._static_half_extents[body] = half
         return body
+
+    def static_box_half_extents(self, box_id: int) -> np.ndarray:
+        self._static_box_arena(box_id)
+        return self._static_half_extents[box_id].copy()
 
     def move_static_box(self, box_id: int, center_uu: np.ndarray) -> None:
         """Put a static box's centre at ``center_uu`` (between rounds; it does not sweep through bodies)."""
@@ -569,7 +575,7 @@ class ArenaBatch:
         self._static_box_arena(box_id)
         pb.removeBody(box_id, physicsClientId=self.client)
         self._static_set.discard(box_id)
-        del self._static_boxes[box_id]
+        del self._static_boxes[box_id], self._static_half_extents[box_id]
 
     def _static_box_arena(self, box_id: int) -> int:
         if box_id not in self._static_boxes:

@@ -131,6 +131,11 @@ def test_static_box_bounces_the_ball_moves_and_goes_away():
     assert ball.pos[1] < 2000.0 - 50.0 - C.BALL_RADIUS + 1.0 and ball.vel[1] < -300.0  # bounced back
     arena.move_static_box(box, [0.0, 2000.0, 600.0])  # lifted: the rolling ball passes under
     assert roll_ball_at(arena).pos[1] > 2100.0
+    arena.move_static_box(box, [0.0, 2000.0, -140.0])  # sunk to a 10 uu kerb: the ball bumps up over it
+    ball = roll_ball_at(arena)
+    assert ball.pos[1] > 2000.0 + 50.0 and ball.vel[2] > 100.0
+    with pytest.raises(ValueError, match="top half extent"):  # sunk out of sight
+        arena.move_static_box(box, [0.0, 2000.0, -160.0])
     arena.move_static_box(box, [0.0, 2000.0, 150.0])
     arena.remove_static_box(box)
     assert roll_ball_at(arena).pos[1] > 2100.0
@@ -214,6 +219,26 @@ def test_a_lifted_barrier_lets_a_low_shot_pass_under_it(lift_uu, scores):
     _, infos = run(env)
     assert infos["blue_0"]["summary"]["goals"] == 0
     env.close()
+
+
+def test_the_curriculum_grows_the_standing_barrier_from_its_easy_height():
+    env = barrier_env(easy_barrier_height_uu=60.0)  # difficulty 0: a 300 uu box sunk 240 uu into the floor
+    (barrier,) = env.unwrapped.rules.game_state().obstacles
+    assert barrier.center[2] + barrier.half_extents[2] == pytest.approx(60.0)
+    assert np.allclose(barrier.half_extents, [400.0, 50.0, 150.0])
+    straight_shot(env)  # the car pops the ball (~230 uu) over the low wall: the shot the full wall blocks
+    _, infos = run(env)
+    assert infos["blue_0"]["summary"]["goals"] == 1
+    env.close()
+
+    env = barrier_env(easy_barrier_height_uu=60.0, difficulty=1.0, barrier_x_jitter_uu=0.0)
+    for seed in range(5):  # at difficulty 1 it is the full wall on the floor, whatever the easy end
+        env.reset(seed=seed)
+        (barrier,) = env.unwrapped.rules.game_state().obstacles
+        assert barrier.center[2] == pytest.approx(150.0)
+    env.close()
+    with pytest.raises(ValueError, match="easy_barrier_height_uu"):
+        barrier_env(easy_barrier_height_uu=301.0)
 
 
 def test_a_car_bounces_off_the_barrier():
@@ -305,6 +330,34 @@ def test_a_scripted_double_jump_scores_the_aerial_with_the_seed_actions():
     assert summary["is_success"] is True and summary["aerial_touches"] == 1
     assert any(e["kind"] == "goal" for e in infos["blue_0"]["events"]) and rewards["blue_0"] == pytest.approx(9.99)
     env.close()
+
+
+def test_the_aerial_curriculum_starts_from_a_ball_one_jump_reaches():
+    easy = {"easy_ball_height_uu": 260.0, "easy_aerial_min_height_uu": 100.0}
+    env = aerial_env(**easy)  # difficulty 0: the ball hangs at 260 uu and a car above 100 uu touches in the air
+    rules = env.unwrapped.rules
+    ball = rules.arena.ball.get_state().pos
+    assert ball[2] == pytest.approx(260.0) and rules.aerial_height_needed_uu == pytest.approx(100.0)
+    place(env, car_pos=(ball[0], ball[1] - 300.0, C.CAR_SPAWN_REST_Z), ball_pos=ball, car_vel=(0.0, 500.0, 0.0))
+    touched_at = None
+    for step in range(30):  # roll under the ball and jump (held): the roof meets it on the way up
+        jump = 1.0 if step >= 6 else -1.0
+        env.step({"blue_0": np.array([0.0, 0.0, jump, -1.0, -1.0], np.float32)})
+        if rules.stats["blue_0"]["aerial_touches"]:
+            touched_at = step
+            break
+    assert touched_at is not None and rules.cars["blue_0"].get_state().pos[2] > 100.0
+    env.close()
+
+    env = aerial_env(**easy, difficulty=1.0)  # at difficulty 1 it is the seed's task, whatever the easy end
+    rules = env.unwrapped.rules
+    for seed in range(5):
+        env.reset(seed=seed)
+        assert 550.0 <= rules.arena.ball.get_state().pos[2] <= 900.0
+        assert rules.aerial_height_needed_uu == pytest.approx(400.0)
+    env.close()
+    with pytest.raises(ValueError, match="easy_aerial_min_height_uu"):
+        aerial_env(easy_aerial_min_height_uu=500.0)
 
 
 def test_aerial_goal_without_an_aerial_touch_does_not_count():

@@ -27,6 +27,12 @@ class Aerial(ShotMinigame):
     ``GameState.mode_state`` carries the sensors' flags (``seed_aerial``): ``ball_frozen``, ``release_in_s``,
     ``release_after_s``, and per agent ``aerial_touch_done`` and ``touch_waiting_reset`` (touched the ball
     and not back on the ground since). ``difficulty`` narrows the ranges to the lowest, nearest, centred ball.
+
+    For curricula, ``easy_ball_height_uu`` and ``easy_aerial_min_height_uu`` move the easy end below the
+    task's own: at difficulty ``d`` the ball hangs ``easy + d * (min - easy) .. easy + d * (max - easy)``
+    high and an aerial touch needs the car above ``easy + d * (aerial_min_height_uu - easy)``. A ball
+    hanging low enough to reach with one jump is where a car learns to touch it in the air at all; at
+    difficulty 1 (evaluation) the task is the seed's whatever these are. Unset, they equal the task's values.
     """
 
     REWARD_TERMS = ShotMinigame.REWARD_TERMS + ("aerial_touch",)
@@ -36,6 +42,7 @@ class Aerial(ShotMinigame):
                  ball_x_range_uu: float = 800.0, ball_height_min_uu: float = 550.0,
                  ball_height_max_uu: float = 900.0, car_behind_uu: float = 1200.0, car_x_range_uu: float = 800.0,
                  release_after_s: float = 3.0, aerial_min_height_uu: float = 400.0, timeout_s: float = 10.0,
+                 easy_ball_height_uu: float | None = None, easy_aerial_min_height_uu: float | None = None,
                  **kwargs):
         super().__init__(timeout_s=timeout_s, **kwargs)
         self.ball_distance_uu = check_range("ball_distance_min_uu", ball_distance_min_uu, "ball_distance_max_uu",
@@ -47,14 +54,21 @@ class Aerial(ShotMinigame):
         self.car_x_range_uu = check_number("car_x_range_uu", car_x_range_uu, 0.0, 2500.0)
         self.release_after_s = check_number("release_after_s", release_after_s, 0.0)
         self.aerial_min_height_uu = check_number("aerial_min_height_uu", aerial_min_height_uu, 0.0, C.ARENA_HEIGHT)
+        self.easy_ball_height_uu = self.ball_height_uu[0] if easy_ball_height_uu is None else check_number(
+            "easy_ball_height_uu", easy_ball_height_uu, 2.0 * C.BALL_RADIUS, self.ball_height_uu[0])
+        self.easy_aerial_min_height_uu = self.aerial_min_height_uu if easy_aerial_min_height_uu is None else (
+            check_number("easy_aerial_min_height_uu", easy_aerial_min_height_uu, 0.0, self.aerial_min_height_uu))
         self.aerial_done: dict[str, bool] = {}
         self.waiting_reset: dict[str, bool] = {}
         self.aerial_touches_this_decision: list[str] = []
+        self.aerial_height_needed_uu = self.aerial_min_height_uu  # the car's height for an aerial touch, this round
 
     def spawn_mutators(self) -> list[StateMutator]:
         d = self.difficulty
+        ball_z_uu = (self.eased(self.easy_ball_height_uu, self.ball_height_uu[0]),
+                     self.eased(self.easy_ball_height_uu, self.ball_height_uu[1]))
         return [ShotSpawn(ball_distance_uu=self.scaled(*self.ball_distance_uu), ball_x_uu=d * self.ball_x_range_uu,
-                          ball_z_uu=self.scaled(*self.ball_height_uu), car_behind_uu=self.car_behind_uu,
+                          ball_z_uu=ball_z_uu, car_behind_uu=self.car_behind_uu,
                           car_x_uu=d * self.car_x_range_uu, car_boost=self.car_boost)]
 
     def on_reset(self, rng) -> None:
@@ -65,6 +79,8 @@ class Aerial(ShotMinigame):
     def round_started(self) -> None:
         self.aerial_done = {agent: False for agent in self.cars}
         self.waiting_reset = {agent: False for agent in self.cars}
+        # fixed for the round, as the spawn: a curriculum changes the difficulty between rounds
+        self.aerial_height_needed_uu = self.eased(self.easy_aerial_min_height_uu, self.aerial_min_height_uu)
         if self.release_after_s == 0.0:
             self.arena.ball.release()
 
@@ -84,7 +100,7 @@ class Aerial(ShotMinigame):
     def on_touch(self, agent: str) -> None:
         car = self.cars[agent].get_state()
         self.waiting_reset[agent] = True
-        if car.on_ground or car.pos[2] <= self.aerial_min_height_uu or any(self.aerial_done.values()):
+        if car.on_ground or car.pos[2] <= self.aerial_height_needed_uu or any(self.aerial_done.values()):
             return
         self.aerial_done[agent] = True
         self.stats[agent]["aerial_touches"] += 1

@@ -17,12 +17,14 @@ _PARKED_CENTER = np.array([0.0, -3000.0, 1500.0])
 class BarrierPlacement(StateMutator):
     """Moves the barrier box onto the line from the ball to the goal centre, ``distance_uu`` out from the
     ball, shifted along x by up to ``x_jitter_uu``; with ``lift_probability`` its bottom edge is raised to a
-    height in ``lift_uu`` (else it stands on the floor). Runs after the ball is placed; ``obstacle`` and
-    ``lifted`` tell the rules what it did."""
+    height in ``lift_uu``, else it stands with its top ``standing_top_uu`` above the floor (sunk into the floor
+    if that is below its height). Runs after the ball is placed; ``obstacle`` and ``lifted`` tell the rules
+    what it did."""
 
     def __init__(self, box_id: int, half_extents: np.ndarray, distance_uu: tuple[float, float],
-                 x_jitter_uu: float, lift_probability: float, lift_uu: tuple[float, float]):
-        self.box_id, self.half_extents = box_id, half_extents
+                 x_jitter_uu: float, lift_probability: float, lift_uu: tuple[float, float],
+                 standing_top_uu: float):
+        self.box_id, self.half_extents, self.standing_top_uu = box_id, half_extents, standing_top_uu
         self.distance_uu, self.x_jitter_uu = distance_uu, x_jitter_uu
         self.lift_probability, self.lift_uu = lift_probability, lift_uu
         self.obstacle: Obstacle | None = None
@@ -34,7 +36,7 @@ class BarrierPlacement(StateMutator):
         center_xy = ball[:2] + to_goal / np.linalg.norm(to_goal) * rng.uniform(*self.distance_uu)
         center_xy[0] += rng.uniform(-self.x_jitter_uu, self.x_jitter_uu)
         self.lifted = bool(rng.random() < self.lift_probability)
-        bottom = rng.uniform(*self.lift_uu) if self.lifted else 0.0
+        bottom = rng.uniform(*self.lift_uu) if self.lifted else self.standing_top_uu - 2.0 * self.half_extents[2]
         center = np.array([center_xy[0], center_xy[1], bottom + self.half_extents[2]])
         arena.move_static_box(self.box_id, center)
         self.obstacle = Obstacle(center=center, half_extents=self.half_extents.copy())
@@ -53,6 +55,10 @@ class Barrier(ShotMinigame):
     under it, a chip hits it. ``difficulty`` narrows every range towards its easy end (0: fixed spawn, the
 nearest ball and barrier, the highest lift).
     ``GameState.obstacles`` holds the barrier, so the ray sensor sees it and the renderer draws it.
+
+    For curricula, ``easy_barrier_height_uu`` is how tall the standing barrier is at difficulty 0 (the box
+    sunk into the floor); it grows to ``barrier_height_uu`` at difficulty 1, so the chip over it is learnt
+    from small hops up. Unset, it is ``barrier_height_uu`` at every difficulty.
     """
 
     def __init__(self, ball_distance_min_uu: float = 2000.0, ball_distance_max_uu: float = 3000.0,
@@ -61,7 +67,7 @@ nearest ball and barrier, the highest lift).
                  barrier_thickness_uu: float = 100.0, barrier_distance_min_uu: float = 700.0,
                  barrier_distance_max_uu: float = 1200.0, barrier_x_jitter_uu: float = 300.0,
                  lift_probability: float = 0.5, lift_min_uu: float = 220.0, lift_max_uu: float = 300.0,
-                 timeout_s: float = 12.0, **kwargs):
+                 easy_barrier_height_uu: float | None = None, timeout_s: float = 12.0, **kwargs):
         super().__init__(timeout_s=timeout_s, **kwargs)
         self.ball_distance_uu = check_range("ball_distance_min_uu", ball_distance_min_uu, "ball_distance_max_uu",
                                             ball_distance_max_uu, 1500.0, C.ARENA_EXTENT_Y - 500.0)
@@ -80,6 +86,9 @@ nearest ball and barrier, the highest lift).
         self.barrier_x_jitter_uu = check_number("barrier_x_jitter_uu", barrier_x_jitter_uu, 0.0, 1500.0)
         self.lift_probability = check_number("lift_probability", lift_probability, 0.0, 1.0)
         self.lift_uu = check_range("lift_min_uu", lift_min_uu, "lift_max_uu", lift_max_uu, 0.0, 1200.0)
+        height_uu = 2.0 * self.half_extents[2]
+        self.easy_barrier_height_uu = height_uu if easy_barrier_height_uu is None else check_number(
+            "easy_barrier_height_uu", easy_barrier_height_uu, 0.0, height_uu)
         self.barrier_id: int | None = None
         self._barrier_arena: Arena | None = None  # the arena the box was added to
         self.lifted = False
@@ -95,7 +104,8 @@ nearest ball and barrier, the highest lift).
                          car_x_uu=d * self.car_x_range_uu, car_boost=self.car_boost)
         self._placement = BarrierPlacement(self.barrier_id, self.half_extents, self.scaled(*self.barrier_distance_uu),
                                            d * self.barrier_x_jitter_uu, self.lift_probability,
-                                           (self.lift_uu[1] - d * (self.lift_uu[1] - self.lift_uu[0]), self.lift_uu[1]))
+                                           (self.lift_uu[1] - d * (self.lift_uu[1] - self.lift_uu[0]), self.lift_uu[1]),
+                                           self.eased(self.easy_barrier_height_uu, 2.0 * self.half_extents[2]))
         return [shot, self._placement]
 
     def round_started(self) -> None:

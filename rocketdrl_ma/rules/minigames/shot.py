@@ -128,6 +128,10 @@ class ShotMinigame(Rules):
         """A (lo, hi) draw range narrowed towards ``lo`` by the difficulty."""
         return lo, lo + self.difficulty * (hi - lo)
 
+    def eased(self, easy: float, hard: float) -> float:
+        """A value moved from ``easy`` (difficulty 0) to ``hard`` (difficulty 1)."""
+        return easy + self.difficulty * (hard - easy)
+
     # ------------------------------------------------------------------ hooks for subclasses
     def round_started(self) -> None:
         """Per-round bookkeeping after the round's spawn (barrier placement, ball release timer)."""
