@@ -221,37 +221,63 @@ def arena_ray_distances(origin, dirs, max_len):
     return out
 
 
-def ray_sphere(origin: np.ndarray, dirs: np.ndarray, center: np.ndarray, radius: float) -> np.ndarray:
-    """Entry distance of each unit ray into a sphere (0 if the origin is inside; inf if missed)."""
-    oc = origin - center
-    b = dirs @ oc
-    c = float(oc @ oc) - radius * radius
-    disc = b * b - c
-    with np.errstate(invalid="ignore"):
-        t = -b - np.sqrt(disc)
+@njit(cache=True)
+def _ray_sphere(ox, oy, oz, dx, dy, dz, center, radius):
+    """Entry distance of a unit ray into a sphere (0 if the origin is inside; inf if missed)."""
+    cx, cy, cz = ox - center[0], oy - center[1], oz - center[2]
+    c = cx * cx + cy * cy + cz * cz - radius * radius
     if c <= 0.0:
-        return np.zeros(len(dirs))
-    return np.where((disc >= 0.0) & (t >= 0.0), t, np.inf)
+        return 0.0
+    b = dx * cx + dy * cy + dz * cz
+    disc = b * b - c
+    if disc < 0.0:
+        return np.inf
+    t = -b - math.sqrt(disc)
+    return t if t >= 0.0 else np.inf
 
 
-def ray_boxes(origin: np.ndarray, dirs: np.ndarray, centers: np.ndarray, axes: np.ndarray,
-              half: np.ndarray) -> np.ndarray:
-    """Entry distances (n_rays, n_boxes) into oriented boxes (slab test; 0 if the origin is inside, inf if
-    missed). ``axes[m]`` holds box ``m``'s unit axes as columns; ``half[m]`` its half extents along them."""
-    if len(centers) == 0:
-        return np.full((len(dirs), 0), np.inf)
-    o_local = np.einsum("mik,mi->mk", axes, origin[None, :] - centers)  # (m, 3)
-    d_local = np.einsum("mik,ni->nmk", axes, dirs)  # (n, m, 3)
-    parallel = np.abs(d_local) < 1e-12
-    inside_slab = np.abs(o_local) <= half  # (m, 3)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t1 = (-half - o_local) / d_local
-        t2 = (half - o_local) / d_local
-    t_near = np.where(parallel, np.where(inside_slab, -np.inf, np.inf), np.minimum(t1, t2))
-    t_far = np.where(parallel, np.where(inside_slab, np.inf, -np.inf), np.maximum(t1, t2))
-    enter, leave = t_near.max(axis=2), t_far.min(axis=2)
-    hit = (enter <= leave) & (leave >= 0.0)
-    return np.where(hit, np.maximum(enter, 0.0), np.inf)
+@njit(cache=True)
+def _ray_box(ox, oy, oz, dx, dy, dz, center, axes, half):
+    """Entry distance of a unit ray into an oriented box (slab test; 0 if the origin is inside, inf if missed).
+    ``axes`` holds the box's unit axes as columns, ``half`` its half extents along them."""
+    enter, leave = -np.inf, np.inf
+    rx, ry, rz = ox - center[0], oy - center[1], oz - center[2]
+    for k in range(3):
+        o = axes[0, k] * rx + axes[1, k] * ry + axes[2, k] * rz
+        d = axes[0, k] * dx + axes[1, k] * dy + axes[2, k] * dz
+        if abs(d) < 1e-12:
+            if abs(o) > half[k]:
+                return np.inf
+            continue
+        t1, t2 = (-half[k] - o) / d, (half[k] - o) / d
+        enter, leave = max(enter, min(t1, t2)), min(leave, max(t1, t2))
+    if enter <= leave and leave >= 0.0:
+        return max(enter, 0.0)
+    return np.inf
+
+
+@njit(cache=True)
+def ray_hits(origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
+    """Per unit ray in ``dirs`` (n, 3) from ``origin``: the nearest hit distance within ``reach`` (inf if
+    none) and its class (index into ``RAY_CLASSES``; -1 if none): the ball sphere, oriented boxes of class
+    ``box_class[m]`` (cars, barriers), and the arena. On a tie the lower class wins."""
+    n = dirs.shape[0]
+    nearest = np.full(n, np.inf)
+    cls = np.full(n, -1, np.int64)
+    walls = arena_ray_distances(origin, dirs, reach)
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    for i in range(n):
+        dx, dy, dz = dirs[i, 0], dirs[i, 1], dirs[i, 2]
+        best, best_cls = _ray_sphere(ox, oy, oz, dx, dy, dz, ball_pos, ball_radius), 0
+        for m in range(box_centers.shape[0]):
+            t = _ray_box(ox, oy, oz, dx, dy, dz, box_centers[m], box_axes[m], box_half[m])
+            if t < best or (t == best and box_class[m] < best_cls):
+                best, best_cls = t, box_class[m]
+        if walls[i] < best:
+            best, best_cls = walls[i], 3
+        if best <= reach:
+            nearest[i], cls[i] = best, best_cls
+    return nearest, cls
 
 
 class RaySensor(ObsBuilder):
@@ -304,29 +330,26 @@ class RaySensor(ObsBuilder):
         """Per ray: the nearest hit distance (inf if none within reach) and its class index into
         ``RAY_CLASSES`` (-1 if none)."""
         car = state.cars[agent]
-        origin = car.pos
-        dirs = self.ray_directions(car.rot_mat)
-        dist = np.full((self.n_rays, len(RAY_CLASSES)), np.inf)
-        dist[:, 0] = ray_sphere(origin, dirs, state.ball.pos, C.BALL_RADIUS)
-        others = [(name, other) for name, other in state.cars.items() if name != agent and not other.is_demoed]
-        if others:
-            centers, axes, half = [], [], []
-            for name, other in others:
+        centers, axes, half, box_class = [], [], [], []
+        for name, other in state.cars.items():
+            if name != agent and not other.is_demoed:
                 cfg = state.car_configs.get(name) or self._octane
                 centers.append(other.pos + other.rot_mat @ np.asarray(cfg.hitbox_offset, dtype=np.float64))
                 axes.append(other.rot_mat)
                 half.append(np.asarray(cfg.hitbox_size, dtype=np.float64) / 2.0)
-            dist[:, 1] = ray_boxes(origin, dirs, np.array(centers), np.array(axes), np.array(half)).min(axis=1)
-        if state.obstacles:
-            centers = np.array([np.asarray(ob.center, dtype=np.float64) for ob in state.obstacles])
-            half = np.array([np.asarray(ob.half_extents, dtype=np.float64) for ob in state.obstacles])
-            axes = np.broadcast_to(np.eye(3), (len(centers), 3, 3))
-            dist[:, 2] = ray_boxes(origin, dirs, centers, axes, half).min(axis=1)
-        dist[:, 3] = arena_ray_distances(np.ascontiguousarray(origin), np.ascontiguousarray(dirs), self.reach_uu)
-        cls = np.argmin(dist, axis=1)
-        nearest = dist[np.arange(self.n_rays), cls]
-        within = nearest <= self.reach_uu
-        return np.where(within, nearest, np.inf), np.where(within, cls, -1)
+                box_class.append(1)
+        for ob in state.obstacles:
+            centers.append(np.asarray(ob.center, dtype=np.float64))
+            axes.append(np.eye(3))
+            half.append(np.asarray(ob.half_extents, dtype=np.float64))
+            box_class.append(2)
+        if centers:
+            centers, axes, half = np.array(centers), np.array(axes), np.array(half)
+        else:
+            centers, axes, half = np.empty((0, 3)), np.empty((0, 3, 3)), np.empty((0, 3))
+        return ray_hits(np.ascontiguousarray(car.pos, dtype=np.float64), self.ray_directions(car.rot_mat),
+                        np.ascontiguousarray(state.ball.pos, dtype=np.float64), C.BALL_RADIUS, centers, axes, half,
+                        np.array(box_class, dtype=np.int64), self.reach_uu)
 
     def build(self, agent: str, state: GameState) -> np.ndarray:
         agent_team(agent)  # validates the name

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from rocketdrl_ma.env.observations import (ARENA_DIAGONAL, OBS_BUILDERS, CombinedObs, ObsBuilder, RaySensor,
-                                           SeedSensors, TeamRelativeObs, make_obs_builder)
+                                           SeedSensors, TeamRelativeObs, make_obs_builder, ray_hits)
 from rocketdrl_ma.physics import BallState, CarControls, CarState, get_preset, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, Obstacle, agent_names
@@ -248,6 +248,41 @@ def test_other_cars_are_seen_by_their_hitbox_and_demoed_ones_are_not():
     demoed = CarState(pos=[600.0, 0.0, z], is_demoed=True)
     obs = rays.build("blue_0", scene({"blue_0": me, "orange_0": demoed}))
     assert list(obs[1:]) == [0.0, 0.0, 0.0, 1.0] and obs[0] * 5000.0 == pytest.approx(C.ARENA_EXTENT_X, abs=0.1)
+
+
+def test_compiled_ray_hits_agree_with_marching_along_each_ray():
+    """The slab and sphere tests against a plain march in 0.25 uu steps through random spheres and rotated
+    boxes (from (0, 0, 1000) with a 900 uu reach the arena is out of reach)."""
+    rng = np.random.default_rng(7)
+    step, reach = 0.25, 900.0
+    origin = np.array([0.0, 0.0, 1000.0])
+    ts = np.arange(0.0, reach + step, step)
+    for _ in range(30):
+        ball = origin + rng.uniform(-700.0, 700.0, 3)
+        m = int(rng.integers(0, 4))
+        centers = origin + rng.uniform(-700.0, 700.0, (m, 3))
+        targets = np.vstack([ball, centers])[rng.integers(0, m + 1, 8)] + rng.normal(0.0, 120.0, (8, 3))
+        dirs = targets - origin  # aimed near the shapes, so most rays hit one, some graze or miss
+        dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+        axes = np.array([random_rotation(rng) for _ in range(m)]).reshape(m, 3, 3)
+        half = rng.uniform(20.0, 300.0, (m, 3))
+        classes = rng.integers(1, 3, m)
+        nearest, cls = ray_hits(origin, dirs, ball, C.BALL_RADIUS, centers, axes, half, classes, reach)
+        for i, d in enumerate(dirs):
+            points = origin + ts[:, None] * d
+            inside = [np.linalg.norm(points - ball, axis=1) <= C.BALL_RADIUS]
+            for k in range(m):
+                local = (points - centers[k]) @ axes[k]
+                inside.append(np.all(np.abs(local) <= half[k], axis=1))
+            first = [int(np.argmax(hit)) if hit.any() else None for hit in inside]
+            hits = [(ts[f], 0 if k == 0 else int(classes[k - 1])) for k, f in enumerate(first) if f is not None]
+            if not hits:
+                assert cls[i] == -1 and nearest[i] == np.inf
+                continue
+            t_ref, cls_ref = min(hits)
+            assert nearest[i] == pytest.approx(t_ref, abs=step)
+            if sum(abs(t - t_ref) <= step for t, _ in hits) == 1:  # no near-tie between shapes
+                assert cls[i] == cls_ref
 
 
 # ---------------------------------------------------------------- seed sensors
