@@ -105,6 +105,42 @@ def test_snapshots_enter_the_pool_and_the_learner_plays_both_sides(tmp_path):
     again.close()
 
 
+def test_each_copy_of_the_pool_plays_the_lone_env_game_of_its_seed(tmp_path):
+    """Copy i is the PettingZoo env seeded ``seed + i`` with the learner on its side (copies start on alternate
+    sides) and the opponent's actions in the other columns: rewards and ends match a lone env's bit for bit, rows
+    to 1e-6 (the VectorEnv builds team-relative observations for all arenas at once)."""
+    from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+    from rocketdrl_ma.policies.scripted import make_scripted
+
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
+                                 "selfplay": {**TINY["selfplay"], "self_play": 0.0}})
+    pool = SelfPlayPool(cfg, tmp_path)
+    pool.attach(PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 32, 2, True), 1)
+    rng = np.random.default_rng(3)
+    actions = rng.uniform(-1.0, 1.0, (60, pool.n_rows, 8)).astype(np.float32)
+    rows = [pool.reset()]
+    results = [pool.step(a) for a in actions]
+    for i in range(cfg["n_envs"]):
+        learner = "orange_0" if i % 2 == 0 else "blue_0"  # episode 1 of copy i: TEAMS[(i + 1) % 2]
+        opponent_name = "blue_0" if learner == "orange_0" else "orange_0"
+        env = RocketDRLParallelEnv(cfg["env"], **{**cfg["env_overrides"], "info_format": "full"})
+        obs, _ = env.reset(seed=cfg["seed"] + i)
+        bot = make_scripted("ball_chaser")
+        assert np.allclose(rows[0][i], obs[learner], rtol=0.0, atol=1e-6)
+        for t, result in enumerate(results):
+            step = {learner: actions[t, i], opponent_name: env.action_parser.encode(bot.act(opponent_name,
+                                                                                          env.game_state))}
+            obs, rewards, term, trunc, _ = env.step(step)
+            assert rewards[learner] == result.reward[i]
+            if term[learner] or trunc[learner]:
+                assert result.terminated[i] or result.truncated[i]
+                assert np.allclose(result.final_obs[i], obs[learner], rtol=0.0, atol=1e-6)
+                break
+            assert np.allclose(result.obs[i], obs[learner], rtol=0.0, atol=1e-6), (i, t)
+        env.close()
+    pool.close()
+
+
 @pytest.mark.slow
 def test_short_selfplay_run_end_to_end(tmp_path):
     cfg_path = tmp_path / "sp.yaml"

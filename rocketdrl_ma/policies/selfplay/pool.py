@@ -1,7 +1,7 @@
 """The self-play env pool: the learner drives one team of every env copy, an opponent the other.
 
 It has the interface of ``ppo.envs.EnvPool`` (rows are the learner's cars only), so the PPO trainer
-runs unchanged. At each episode start a copy swaps the learner's side and draws its opponent: the
+runs unchanged; the copies are the arenas of one ``VectorEnv``, copy ``i`` seeded with ``seed + i``. At each episode start a copy swaps the learner's side and draws its opponent: the
 current policy itself with probability ``self_play``, else PFSP over the pool (scripted bots and the
 newest ``pool_size`` snapshots). Opponent policies sample from their Gaussian (or categorical) like the
 learner does, so past snapshots are played as the stochastic policies they were.
@@ -15,7 +15,7 @@ import numpy as np
 import torch
 from gymnasium import spaces
 
-from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.ppo.envs import Episode, StepResult
 from rocketdrl_ma.policies.ppo.model import PPOModel, env_actions
 from rocketdrl_ma.policies.ppo.shaping import potential
@@ -41,11 +41,16 @@ class SelfPlayPool:
     def __init__(self, cfg: dict[str, Any], run_dir: str | Path):
         self.cfg, self.sp = cfg, cfg["selfplay"]
         overrides = {**cfg["env_overrides"], "info_format": "full"}
-        self.envs = [RocketDRLParallelEnv(cfg["env"], **overrides) for _ in range(cfg["n_envs"])]
+        self.vec = VectorEnv(cfg["env"], n_arenas=cfg["n_envs"], autoreset=False, **overrides)
+        self.envs = self.vec.lanes
         first = self.envs[0]
         if first.config.get("mode") != "match":
+            self.vec.close()
             raise ValueError(f"selfplay: needs a match config with two teams, got mode {first.config.get('mode')!r}")
-        self.team_agents = {t: [a for a in first.possible_agents if a.startswith(t)] for t in TEAMS}
+        self.agents = list(self.vec.possible_agents)
+        self.team_agents = {t: [a for a in self.agents if a.startswith(t)] for t in TEAMS}
+        # column indices into the VectorEnv's agent axis, per team
+        self.team_columns = {t: np.array([self.agents.index(a) for a in self.team_agents[t]]) for t in TEAMS}
         self.team_size = len(self.team_agents["blue"])
         self.n_rows = len(self.envs) * self.team_size
         self.observation_space: spaces.Box = first.observation_space(first.possible_agents[0])
@@ -65,7 +70,7 @@ class SelfPlayPool:
         self._learner_team = ["blue"] * len(self.envs)
         self._opponent = [SELF] * len(self.envs)
         self._playing: list[Any] = [None] * len(self.envs)
-        self._obs: list[dict] = [{} for _ in self.envs]
+        self._obs = np.zeros((len(self.envs), len(self.agents)) + self.observation_space.shape, np.float32)
         self._returns = np.zeros(self.n_rows)
         self._lengths = np.zeros(self.n_rows, dtype=np.int64)
         self._phi = np.zeros(self.n_rows)
@@ -138,7 +143,7 @@ class SelfPlayPool:
     def _learners(self, i: int) -> list[str]:
         return self.team_agents[self._learner_team[i]]
 
-    def _start_episode(self, i: int, obs: dict) -> np.ndarray:
+    def _start_episode(self, i: int) -> np.ndarray:
         self._episodes[i] += 1  # sides swap every episode of a copy, copies start on alternate sides
         self._learner_team[i] = TEAMS[(i + self._episodes[i]) % 2]
         name = self.pick_opponent()
@@ -146,62 +151,71 @@ class SelfPlayPool:
         # held per copy: a snapshot that leaves the pool mid-episode still finishes the episode
         self._playing[i] = None if name == SELF else self.opponents[name]
         self.picks[name] = self.picks.get(name, 0) + 1
-        self._obs[i] = obs
         self._phi[self._rows(i)] = self._potentials(i)
-        return np.array([obs[a] for a in self._learners(i)], np.float32)
+        return self._obs[i, self.team_columns[self._learner_team[i]]]
 
     def reset(self) -> np.ndarray:
-        rows = []
-        for i, env in enumerate(self.envs):
-            obs, _ = env.reset(seed=self.seed + i)
-            rows.append(self._start_episode(i, obs))
+        self._obs[:], _ = self.vec.reset(seed=self.seed)
         self._returns[:] = 0.0
         self._lengths[:] = 0
-        return np.concatenate(rows)
+        return np.concatenate([self._start_episode(i) for i in range(len(self.envs))])
 
-    def _opponent_actions(self, i: int) -> dict[str, Any]:
-        env, name = self.envs[i], self._opponent[i]
-        agents = [a for a in env.possible_agents if a not in self._learners(i)]
-        opponent = self.learner if name == SELF else self._playing[i]
-        if isinstance(opponent, PPOModel):
-            acts = sample_actions(opponent, np.array([self._obs[i][a] for a in agents]))
-            return dict(zip(agents, acts))
-        state = env.game_state
-        return {a: env.action_parser.encode(opponent.act(a, state)) for a in agents}
+    def _opponent_actions(self, actions: np.ndarray) -> None:
+        """Fill the opponents' columns of ``actions`` [copies, agents, ...]: one batched forward per policy."""
+        by_model: dict[int, tuple[PPOModel, list[int]]] = {}
+        for i, env in enumerate(self.envs):
+            side = TEAMS[1 - TEAMS.index(self._learner_team[i])]
+            opponent = self.learner if self._opponent[i] == SELF else self._playing[i]
+            if isinstance(opponent, PPOModel):
+                by_model.setdefault(id(opponent), (opponent, []))[1].append(i)
+            else:
+                state = env.game_state
+                for col, agent in zip(self.team_columns[side], self.team_agents[side]):
+                    actions[i, col] = env.action_parser.encode(opponent.act(agent, state))
+        for model, copies in by_model.values():
+            cols = [self.team_columns[TEAMS[1 - TEAMS.index(self._learner_team[i])]] for i in copies]
+            obs = np.concatenate([self._obs[i, c] for i, c in zip(copies, cols)])
+            acts = sample_actions(model, obs)
+            for n, (i, c) in enumerate(zip(copies, cols)):
+                actions[i, c] = acts[n * self.team_size:(n + 1) * self.team_size]
 
     def step(self, actions: np.ndarray) -> StepResult:
+        learner_actions = np.asarray(actions)
+        full = np.zeros((len(self.envs), len(self.agents)) + learner_actions.shape[1:], learner_actions.dtype)
+        for i in range(len(self.envs)):
+            full[i, self.team_columns[self._learner_team[i]]] = learner_actions[self._rows(i)]
+        self._opponent_actions(full)
+        obs_all, rewards, term, trunc, infos = self.vec.step(full)
+        self._obs[:] = obs_all
         dim = self.observation_space.shape[0]
         obs = np.zeros((self.n_rows, dim), np.float32)
-        final_obs = np.zeros_like(obs)
         reward = np.zeros(self.n_rows, np.float32)
-        terminated = np.zeros(self.n_rows, bool)
-        truncated = np.zeros(self.n_rows, bool)
         shaping = np.zeros(self.n_rows, np.float32)
         episodes: list[Episode] = []
-        for i, env in enumerate(self.envs):
-            rows, learners = self._rows(i), self._learners(i)
-            acts = {**self._opponent_actions(i), **{a: actions[rows][k] for k, a in enumerate(learners)}}
-            o, r, term, trunc, infos = env.step(acts)
-            self._obs[i] = o
-            obs[rows] = [o[a] for a in learners]
-            reward[rows] = [r[a] for a in learners]
-            terminated[rows] = [term[a] for a in learners]
-            truncated[rows] = [trunc[a] and not term[a] for a in learners]
+        ended = term | trunc
+        for i in range(len(self.envs)):
+            rows, team = self._rows(i), self._learner_team[i]
+            obs[rows] = obs_all[i, self.team_columns[team]]
+            reward[rows] = rewards[i, self.team_columns[team]]
             if self.shaping:
                 phi = np.asarray(self._potentials(i))
                 shaping[rows] = phi - self._phi[rows]
                 self._phi[rows] = phi
-            if not env.agents:
-                final_obs[rows] = obs[rows]
-                winner = infos[learners[0]].get("summary", {}).get("winner")
-                team = self._learner_team[i]
+            if ended[i]:
+                learners = self._learners(i)
+                winner = infos[i][learners[0]].get("summary", {}).get("winner")
                 self.pfsp.record(self._opponent[i], 0.5 if winner is None else float(winner == team))
-                for k, agent in enumerate(learners):
+                for k in range(self.team_size):
                     row = rows.start + k
                     episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
                                             winner == team, i))
-                o, _ = env.reset()
-                obs[rows] = self._start_episode(i, o)
+        terminated = np.repeat(term, self.team_size)  # both teams' cars end together
+        truncated = np.repeat(trunc & ~term, self.team_size)
+        final_obs = obs.copy()
+        if ended.any():
+            self._obs[:], _ = self.vec.reset_arenas(ended)
+            for i in np.flatnonzero(ended):
+                obs[self._rows(int(i))] = self._start_episode(int(i))
         done = terminated | truncated
         self._returns = np.where(done, 0.0, self._returns + reward)
         self._lengths = np.where(done, 0, self._lengths + 1)
@@ -217,5 +231,4 @@ class SelfPlayPool:
         raise ValueError("curriculum: self-play trains on a match, which has no difficulty to set")
 
     def close(self) -> None:
-        for env in self.envs:
-            env.close()
+        self.vec.close()
