@@ -77,15 +77,20 @@ def rocketsim_runner(team_size: int, seed: int = 0) -> Callable[[int], None]:
     return run
 
 
-def bare_pybullet_runner(team_size: int, n_arenas: int = 1, seed: int = 0) -> tuple[Callable[[int], None], object]:
+def bare_pybullet_runner(team_size: int, n_arenas: int = 1, seed: int = 0,
+                         state_io: bool = False) -> tuple[Callable[[int], None], object]:
     """Our PyBullet world (arena meshes, planes, balls, car boxes) stepped by ``stepSimulation`` alone.
 
     No car model, no state reads: the cost of Bullet's collision detection and solver for these bodies, which is
-    the ceiling of a design that steps PyBullet every tick. Returns (runner, batch) so the caller can close it.
+    the ceiling of a design that steps PyBullet every tick. With ``state_io`` each tick also makes the PyBullet
+    calls any car model driving these bodies tick by tick must make, through PyBullet's one-body-per-call API:
+    every car's velocities written before the step, every body's pose and velocities read after it (our
+    ``read_rows``). Returns (runner, batch) so the caller can close it.
     """
     import pybullet as pb
 
     from rocketdrl_ma.physics import ArenaBatch
+    from rocketdrl_ma.physics.body_io import read_rows
 
     batch = ArenaBatch(n_arenas, seed=seed)
     for arena in batch.arenas:
@@ -94,9 +99,18 @@ def bare_pybullet_runner(team_size: int, n_arenas: int = 1, seed: int = 0) -> tu
                 arena.add_car(team=team)
         arena.reset_kickoff(seed=seed)
     client = batch.client
+    bodies, cars = batch._ball_bodies + batch._car_bodies, batch._car_bodies
+    still = [0.0, 0.0, 0.0]
 
     def run(decisions: int) -> None:
         for _ in range(decisions * TICKS_PER_DECISION):
             pb.stepSimulation(physicsClientId=client)
 
-    return run, batch
+    def run_with_io(decisions: int) -> None:
+        for _ in range(decisions * TICKS_PER_DECISION):
+            for car in cars:
+                pb.resetBaseVelocity(car, still, still, client)
+            pb.stepSimulation(physicsClientId=client)
+            read_rows(bodies, client)
+
+    return (run_with_io if state_io else run), batch

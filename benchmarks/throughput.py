@@ -4,7 +4,9 @@ Columns: our PettingZoo env (``matches/NvN.yaml``, no kickoff countdown; observa
 included); our ``VectorEnv`` at 16 and 64 arenas (the same, batched); RocketSim with the same random-control
 pattern driven from Python (controls set and every state read each decision, no observations or rewards);
 bare PyBullet ``stepSimulation`` of our bodies at 64 arenas (no car model, no game logic: the ceiling of our
-design); dm_control soccer when it is installed. An agent-step is one agent's decision. Each cell runs in a fresh
+design); the same plus the state I/O any car model on PyBullet needs each tick (every car's velocities written,
+every body read: two calls per body, PyBullet has no batched call), the real ceiling; dm_control soccer when it is
+installed. An agent-step is one agent's decision. Each cell runs in a fresh
 process, so its peak memory (``ru_maxrss``) is its own; memory per arena is the difference between the 64- and the
 16-arena VectorEnv divided by 48, which leaves out what every process pays once (interpreter, libraries, kernels).
 
@@ -25,9 +27,10 @@ import numpy as np  # noqa: E402
 
 from _reference import ROOT, TICKS_PER_DECISION, bare_pybullet_runner, rocketsim_runner, timed  # noqa: E402
 
-COLUMNS = ("single", "vector16", "vector64", "rocketsim", "bare64", "dm_control")
+COLUMNS = ("single", "vector16", "vector64", "rocketsim", "bare64", "bare64io", "dm_control")
 TITLES = {"single": "PettingZoo env", "vector16": "VectorEnv 16", "vector64": "VectorEnv 64",
-          "rocketsim": "RocketSim", "bare64": "bare PyBullet 64", "dm_control": "dm_control soccer"}
+          "rocketsim": "RocketSim", "bare64": "bare PyBullet 64", "bare64io": "bare PyBullet 64 + state I/O",
+          "dm_control": "dm_control soccer"}
 
 
 def _config(team_size: int) -> str:
@@ -80,8 +83,8 @@ def _rocketsim(team_size: int, seconds: float, clock: str) -> float:
     return decisions * 2 * team_size / elapsed
 
 
-def _bare(team_size: int, n_arenas: int, seconds: float, clock: str) -> float:
-    run, batch = bare_pybullet_runner(team_size, n_arenas)
+def _bare(team_size: int, n_arenas: int, seconds: float, clock: str, state_io: bool = False) -> float:
+    run, batch = bare_pybullet_runner(team_size, n_arenas, state_io=state_io)
     run(1)
     decisions, elapsed = timed(run, seconds, chunk=1, clock=clock)
     batch.close()
@@ -121,7 +124,8 @@ def run_cell(column: str, team_size: int, seconds: float, clock: str = "wall") -
     elif column == "rocketsim":
         rate = _rocketsim(team_size, seconds, clock)
     elif column.startswith("bare"):
-        rate = _bare(team_size, int(column[len("bare"):]), seconds, clock)
+        io = column.endswith("io")
+        rate = _bare(team_size, int(column[len("bare"):len(column) - 2 * io]), seconds, clock, state_io=io)
     elif column == "dm_control":
         if team_size > 2:
             return {"error": "1v1 and 2v2 only"}
@@ -150,8 +154,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{args.seconds:g} s per cell, "
           f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| scene | " + " | ".join(TITLES[c] for c in COLUMNS) + " | Vector64 / single | Vector64 / RocketSim | "
-          "Vector64 / bare 64 | peak MB: env / Vector16 / Vector64 | MB per arena |")
-    print("|---|" + "---:|" * (len(COLUMNS) + 5))
+          "Vector64 / bare 64 | Vector64 / bare 64 + I/O | peak MB: env / Vector16 / Vector64 | MB per arena |")
+    print("|---|" + "---:|" * (len(COLUMNS) + 6))
     notes = set()
     for size in args.sizes:
         cells = {}
@@ -172,6 +176,7 @@ def main(argv: list[str] | None = None) -> int:
         v64, single = cells["vector64"]["rate"], cells["single"]["rate"]
         print(f"| {size}v{size} | " + " | ".join(text) + f" | {v64 / single:.1f} | "
               f"{v64 / cells['rocketsim']['rate']:.2f} | {v64 / cells['bare64']['rate']:.2f} | "
+              f"{v64 / cells['bare64io']['rate']:.2f} | "
               f"{cells['single']['peak_mb']:.0f} / {cells['vector16']['peak_mb']:.0f} / "
               f"{cells['vector64']['peak_mb']:.0f} | "
               f"{(cells['vector64']['peak_mb'] - cells['vector16']['peak_mb']) / 48:.2f} |", flush=True)
