@@ -124,8 +124,8 @@ def run_cell(column: str, team_size: int, seconds: float, clock: str = "wall") -
     elif column == "rocketsim":
         rate = _rocketsim(team_size, seconds, clock)
     elif column.startswith("bare"):
-        io = column.endswith("io")
-        rate = _bare(team_size, int(column[len("bare"):len(column) - 2 * io]), seconds, clock, state_io=io)
+        arenas = column.removeprefix("bare").removesuffix("io")
+        rate = _bare(team_size, int(arenas), seconds, clock, state_io=column.endswith("io"))
     elif column == "dm_control":
         if team_size > 2:
             return {"error": "1v1 and 2v2 only"}

@@ -1,8 +1,8 @@
 """The self-play env pool: the learner drives one team of every env copy, an opponent the other.
 
 It has the interface of ``ppo.envs.EnvPool`` (rows are the learner's cars only), so the PPO trainer
-runs unchanged; the copies are the arenas of one ``VectorEnv``, copy ``i`` seeded with ``seed + i``. At each episode start a copy swaps the learner's side and draws its opponent: the
-current policy itself with probability ``self_play``, else PFSP over the pool (scripted bots and the
+runs unchanged; the copies are the arenas of one ``VectorEnv``, copy ``i`` seeded with ``seed + i``. At
+each episode start a copy swaps the learner's side and draws its opponent: the current policy itself with probability ``self_play``, else PFSP over the pool (scripted bots and the
 newest ``pool_size`` snapshots). Opponent policies sample from their Gaussian (or categorical) like the
 learner does, so past snapshots are played as the stochastic policies they were.
 """
@@ -143,6 +143,9 @@ class SelfPlayPool:
     def _learners(self, i: int) -> list[str]:
         return self.team_agents[self._learner_team[i]]
 
+    def _opponent_team(self, i: int) -> str:
+        return TEAMS[1 - TEAMS.index(self._learner_team[i])]
+
     def _start_episode(self, i: int) -> np.ndarray:
         self._episodes[i] += 1  # sides swap every episode of a copy, copies start on alternate sides
         self._learner_team[i] = TEAMS[(i + self._episodes[i]) % 2]
@@ -164,16 +167,15 @@ class SelfPlayPool:
         """Fill the opponents' columns of ``actions`` [copies, agents, ...]: one batched forward per policy."""
         by_model: dict[int, tuple[PPOModel, list[int]]] = {}
         for i, env in enumerate(self.envs):
-            side = TEAMS[1 - TEAMS.index(self._learner_team[i])]
             opponent = self.learner if self._opponent[i] == SELF else self._playing[i]
             if isinstance(opponent, PPOModel):
                 by_model.setdefault(id(opponent), (opponent, []))[1].append(i)
             else:
-                state = env.game_state
+                side, state = self._opponent_team(i), env.game_state
                 for col, agent in zip(self.team_columns[side], self.team_agents[side]):
                     actions[i, col] = env.action_parser.encode(opponent.act(agent, state))
         for model, copies in by_model.values():
-            cols = [self.team_columns[TEAMS[1 - TEAMS.index(self._learner_team[i])]] for i in copies]
+            cols = [self.team_columns[self._opponent_team(i)] for i in copies]
             obs = np.concatenate([self._obs[i, c] for i, c in zip(copies, cols)])
             acts = sample_actions(model, obs)
             for n, (i, c) in enumerate(zip(copies, cols)):

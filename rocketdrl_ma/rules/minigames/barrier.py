@@ -86,9 +86,9 @@ nearest ball and barrier, the highest lift).
         self.barrier_x_jitter_uu = check_number("barrier_x_jitter_uu", barrier_x_jitter_uu, 0.0, 1500.0)
         self.lift_probability = check_number("lift_probability", lift_probability, 0.0, 1.0)
         self.lift_uu = check_range("lift_min_uu", lift_min_uu, "lift_max_uu", lift_max_uu, 0.0, 1200.0)
-        height_uu = 2.0 * self.half_extents[2]
-        self.easy_barrier_height_uu = height_uu if easy_barrier_height_uu is None else check_number(
-            "easy_barrier_height_uu", easy_barrier_height_uu, 0.0, height_uu)
+        self.barrier_height_uu = 2.0 * self.half_extents[2]
+        self.easy_barrier_height_uu = self.barrier_height_uu if easy_barrier_height_uu is None else check_number(
+            "easy_barrier_height_uu", easy_barrier_height_uu, 0.0, self.barrier_height_uu)
         self.barrier_id: int | None = None
         self._barrier_arena: Arena | None = None  # the arena the box was added to
         self.lifted = False
@@ -104,8 +104,8 @@ nearest ball and barrier, the highest lift).
                          car_x_uu=d * self.car_x_range_uu, car_boost=self.car_boost)
         self._placement = BarrierPlacement(self.barrier_id, self.half_extents, self.scaled(*self.barrier_distance_uu),
                                            d * self.barrier_x_jitter_uu, self.lift_probability,
-                                           (self.lift_uu[1] - d * (self.lift_uu[1] - self.lift_uu[0]), self.lift_uu[1]),
-                                           self.eased(self.easy_barrier_height_uu, 2.0 * self.half_extents[2]))
+                                           (self.eased(self.lift_uu[1], self.lift_uu[0]), self.lift_uu[1]),
+                                           self.eased(self.easy_barrier_height_uu, self.barrier_height_uu))
         return [shot, self._placement]
 
     def round_started(self) -> None:
