@@ -149,7 +149,12 @@ class LookupTableActions(ActionParser):
         return CarControls(*r[:5], jump=r[5] > 0, boost=r[6] > 0, handbrake=r[7] > 0)
 
     def encode(self, controls: CarControls) -> int:
+        """The nearest row (L1 over the eight controls, buttons as +-1). Controls with no air input (pitch,
+        yaw and roll 0, as a driving bot gives) are matched as the table's ground rows are built, with yaw
+        following steer: otherwise every hard-steering row is one yaw off and a bot could not turn."""
         target = ContinuousActions().encode(controls).astype(np.float64)
+        if controls.pitch == controls.yaw == controls.roll == 0.0:
+            target[3] = target[1]
         table = self.table.copy()
         table[:, 5:] = np.where(table[:, 5:] > 0, 1.0, -1.0)
         return int(np.argmin(np.abs(table - target).sum(axis=1)))

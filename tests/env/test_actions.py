@@ -119,6 +119,18 @@ def test_encode_round_trips_through_parse(parser):
     assert (back.throttle, back.steer, back.boost, back.jump) == (1.0, -1.0, True, False)
 
 
+def test_lookup_encodes_a_driving_bots_steering_to_both_sides():
+    """A scripted bot drives with steer alone (yaw 0); the table's ground rows yaw with their steer. The nearest
+    row must still be the one that steers: once it was always the straight row for a right turn."""
+    p = LookupTableActions()
+    for steer, expected in ((-1.0, -1.0), (-0.6, -1.0), (-0.3, 0.0), (0.0, 0.0), (0.3, 0.0), (0.6, 1.0), (1.0, 1.0)):
+        for throttle in (-1.0, 1.0):
+            back = p.parse("blue_0", p.encode(CarControls(throttle=throttle, steer=steer)))
+            assert (back.throttle, back.steer) == (throttle, expected), (throttle, steer)
+    drift = p.parse("blue_0", p.encode(CarControls(throttle=1.0, steer=1.0, handbrake=True)))
+    assert (drift.steer, drift.handbrake, drift.jump) == (1.0, True, False)
+
+
 def test_registry():
     assert set(ACTION_PARSERS) == {"seed", "continuous", "lookup"}
     assert all(issubclass(cls, ActionParser) for cls in ACTION_PARSERS.values())

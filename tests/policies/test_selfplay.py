@@ -10,7 +10,7 @@ from rocketdrl_ma.cli import main
 from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
 from rocketdrl_ma.policies.ppo.model import PPOModel, action_spec
 from rocketdrl_ma.policies.registry import load_policy
-from rocketdrl_ma.policies.selfplay.imitation import collect
+from rocketdrl_ma.policies.selfplay.imitation import collect, disagreement
 from rocketdrl_ma.policies.selfplay.pfsp import PFSP
 from rocketdrl_ma.policies.selfplay.pool import SELF, SelfPlayPool
 
@@ -158,6 +158,9 @@ def test_short_selfplay_run_end_to_end(tmp_path):
 def test_imitation_warm_start_clones_the_bot(tmp_path):
     with pytest.raises(ValueError, match="selfplay.imitate.bot"):
         validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), "selfplay": {"imitate": {"bot": "x"}}})
+    with pytest.raises(ValueError, match=r"selfplay.imitate.dagger_rounds: expected an int >= 0"):
+        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"),
+                               "selfplay": {"imitate": {"dagger_rounds": -1}}})
     cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
                                  "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 300, "epochs": 15}}})
     pool = SelfPlayPool(cfg, tmp_path)
@@ -166,7 +169,49 @@ def test_imitation_warm_start_clones_the_bot(tmp_path):
     assert obs.shape == (200, pool.observation_space.shape[0]) and actions.shape == (200, 8)  # both cars
     error_before = np.mean((model.act_deterministic(obs) - actions) ** 2)
     pool.attach(model, 0)  # a fresh run: the warm start runs here
-    losses = pool.imitation_losses
+    losses = pool.imitation["losses"]
     assert len(losses) == 15 and losses[-1] < 0.5 * losses[0]
     assert np.mean((model.act_deterministic(obs) - actions) ** 2) < 0.5 * error_before  # on other matches too
     pool.close()
+
+
+def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tmp_path):
+    """A DAgger round's data is the clone's own trajectory (greedy lookup rows for its car, the bot for the
+    other car), each state labelled with the bot's row; refitting on it makes the clone take those rows."""
+    from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+    from rocketdrl_ma.policies.scripted import make_scripted
+    from rocketdrl_ma.policies.selfplay.imitation import clone
+
+    overrides = {**TINY["env_overrides"], "clock_s": 4.0, "action": "lookup"}
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY, "env_overrides": overrides,
+                                 "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 300, "epochs": 5,
+                                                                              "dagger_rounds": 2,
+                                                                              "dagger_decisions": 200}}})
+    pool = SelfPlayPool(cfg, tmp_path)
+    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 64, 2, True,
+                     features="car_local")
+    pool.attach(model, 0)
+    pool.close()
+    rounds = pool.imitation["dagger_disagreement"]
+    assert len(rounds) == 2 and all(0.0 <= r <= 1.0 for r in rounds)
+
+    obs, labels = collect(cfg["env"], overrides, "ball_chaser", "ball_chaser", 120, 7, model, bot_share=0.0)
+    assert labels.dtype == np.int64 and obs.shape == (120, pool.observation_space.shape[0])
+    env, bot = RocketDRLParallelEnv(cfg["env"], **overrides), make_scripted("ball_chaser")
+    seen, episode = env.reset(seed=7)[0], 0
+    for t in range(120):  # the same game again: the clone's car on alternating sides, the bot on the other
+        mine = ("blue_0", "orange_0")[episode % 2]
+        state = env.game_state
+        assert np.array_equal(seen[mine], obs[t]) and labels[t] == env.action_parser.encode(bot.act(mine, state))
+        actions = {a: env.action_parser.encode(bot.act(a, state)) for a in env.agents}
+        actions[mine] = int(model.act_deterministic(obs[t][None])[0])
+        seen = env.step(actions)[0]
+        if not env.agents:
+            episode += 1
+            seen = env.reset()[0]
+    env.close()
+    assert episode >= 1  # both sides were played
+
+    before = disagreement(model, obs, labels)
+    clone(model, obs, labels, epochs=40, fit_normaliser=False)
+    assert disagreement(model, obs, labels) < 0.5 * before

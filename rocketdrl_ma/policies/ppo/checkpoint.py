@@ -68,7 +68,8 @@ def load_model(path: str | Path) -> tuple[PPOModel, dict[str, Any]]:
     p = resolve_checkpoint(path)
     meta = read_meta(p)
     net = meta["network"]
-    model = PPOModel(net["obs_dim"], net["action"], net["hidden_units"], net["num_layers"], net["normalize"])
+    model = PPOModel(net["obs_dim"], net["action"], net["hidden_units"], net["num_layers"], net["normalize"],
+                     features=net.get("features", "none"))  # checkpoints from before features: none
     model.load_state_dict(torch.load(p, map_location="cpu", weights_only=True))
     model.eval()
     return model, meta

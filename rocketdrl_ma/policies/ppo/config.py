@@ -22,6 +22,8 @@ hops. ``curriculum`` (as ML-Agents' lessons, over a minigame's ``difficulty``): 
 each time the last 100 training episodes succeed at least ``threshold`` of the time, raise the
 difficulty by ``step`` up to 1; empty: train at the env config's difficulty throughout.
 ``selfplay``: train one team against an opponent pool (``policies/selfplay/config.py``); empty: none.
+``features``: fixed inputs the model computes from the observation (``features.py``): ``none``, or
+``car_local`` (ball and other cars in the car's own frame; needs the ``team_relative`` observation).
 """
 from __future__ import annotations
 
@@ -34,6 +36,7 @@ from rocketdrl_ma.config import load_config, resolve_config_path
 
 from rocketdrl_ma.policies.selfplay.config import check_selfplay
 
+from .features import FEATURES
 from .shaping import check_shaping
 
 #: every key a training config may hold, with its default (ML-Agents' PPO defaults where it has one)
@@ -63,6 +66,7 @@ TRAIN_DEFAULTS: dict[str, Any] = {
     "keep_checkpoints": 5,
     "shaping": {},
     "init_std": 1.0,
+    "features": "none",
     "curriculum": {},
     "selfplay": {},
 }
@@ -112,6 +116,8 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"learning_rate_schedule: {cfg['learning_rate_schedule']!r} is not one of {list(SCHEDULES)}")
     if cfg["device"] not in DEVICES:
         raise ValueError(f"device: {cfg['device']!r} is not one of {list(DEVICES)}")
+    if cfg["features"] not in FEATURES:
+        raise ValueError(f"features: {cfg['features']!r} is not one of {list(FEATURES)}")
     if not isinstance(cfg["normalize"], bool):
         raise ValueError(f"normalize: expected true or false, got {cfg['normalize']!r}")
     if cfg["batch_size"] > cfg["buffer_size"]:

@@ -14,6 +14,8 @@ from tensordict.nn import TensorDictModule
 from torch import nn
 from torchrl.modules import IndependentNormal, ProbabilisticActor, ValueOperator
 
+from .features import make_features
+
 NORM_CLIP = 5.0  # normalised observations are clipped to +-5 standard deviations, as in ML-Agents
 
 
@@ -27,11 +29,13 @@ def action_spec(space: spaces.Space) -> dict:
 
 
 class RunningNorm(nn.Module):
-    """Running mean and variance of observations (parallel Welford update); identity when disabled."""
+    """The model's input: the raw observation with its fixed ``features`` (``features.py``) appended, then
+    normalised by the running mean and variance of that (parallel Welford update; identity when disabled)."""
 
-    def __init__(self, dim: int, enabled: bool):
+    def __init__(self, dim: int, enabled: bool, features: nn.Module | None = None):
         super().__init__()
         self.enabled = enabled
+        self.features = features
         self.register_buffer("mean", torch.zeros(dim))
         self.register_buffer("var", torch.ones(dim))
         self.register_buffer("count", torch.tensor(1e-4))
@@ -40,6 +44,8 @@ class RunningNorm(nn.Module):
     def update(self, x: torch.Tensor) -> None:
         if not self.enabled:
             return
+        if self.features is not None:
+            x = self.features(x)
         batch_mean, batch_var, n = x.mean(0), x.var(0, unbiased=False), x.shape[0]
         delta, total = batch_mean - self.mean, self.count + n
         self.mean += delta * n / total
@@ -47,6 +53,8 @@ class RunningNorm(nn.Module):
         self.count.copy_(total)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if self.features is not None:
+            x = self.features(x)
         if not self.enabled:
             return x
         return ((x - self.mean) / torch.sqrt(self.var + 1e-8)).clamp(-NORM_CLIP, NORM_CLIP)
@@ -80,19 +88,22 @@ class GaussianHead(nn.Module):
 
 class PPOModel(nn.Module):
     def __init__(self, obs_dim: int, action: dict, hidden_units: int, num_layers: int, normalize: bool,
-                 init_std: float = 1.0, init_action: np.ndarray | None = None):
+                 init_std: float = 1.0, init_action: np.ndarray | None = None, features: str = "none"):
         super().__init__()
         self.action = action
-        self.obs_norm = RunningNorm(obs_dim, normalize)
+        feature_module, in_dim = make_features(features, obs_dim)
+        self.features = features  # by name, for the checkpoint's JSON
+        self.input_dim = in_dim  # what the MLPs see: the observation and its features
+        self.obs_norm = RunningNorm(in_dim, normalize, feature_module)
         if action["kind"] == "box":
-            body = mlp(obs_dim, action["dim"], hidden_units, num_layers, 0.01)
+            body = mlp(in_dim, action["dim"], hidden_units, num_layers, 0.01)
             if init_action is not None:  # start from these controls (the idle car: no jump, no boost)
                 with torch.no_grad():
                     body[-1].bias.copy_(torch.as_tensor(init_action, dtype=torch.float32))
             self.policy: nn.Module = GaussianHead(body, action["dim"], init_std)
         else:
-            self.policy = mlp(obs_dim, action["n"], hidden_units, num_layers, 0.01)
-        self.value = mlp(obs_dim, 1, hidden_units, num_layers, 1.0)
+            self.policy = mlp(in_dim, action["n"], hidden_units, num_layers, 0.01)
+        self.value = mlp(in_dim, 1, hidden_units, num_layers, 1.0)
 
     def td_modules(self) -> tuple[ProbabilisticActor, ValueOperator]:
         """torchrl views of the policy and the value over normalised ``"observation"`` (for ClipPPOLoss)."""

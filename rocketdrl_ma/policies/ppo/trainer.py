@@ -69,7 +69,7 @@ def pick_device(name: str) -> torch.device:
 def checkpoint_meta(cfg: dict[str, Any], model: PPOModel, obs_dim: int, agent_steps: int,
                     metrics: dict[str, float], difficulty: float | None = None) -> dict[str, Any]:
     net = {"obs_dim": obs_dim, "action": model.action, "hidden_units": cfg["hidden_units"],
-           "num_layers": cfg["num_layers"], "normalize": cfg["normalize"]}
+           "num_layers": cfg["num_layers"], "normalize": cfg["normalize"], "features": model.features}
     env = {"config": cfg["env"], "overrides": cfg["env_overrides"],
            "resolved": load_config(cfg["env"], cfg["env_overrides"])}
     return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg, "metrics": metrics,
@@ -97,7 +97,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     action = action_spec(pool.action_space)
     idle = pool.envs[0].action_parser.encode(CarControls()) if action["kind"] == "box" else None
     model = PPOModel(obs_dim, action, cfg["hidden_units"], cfg["num_layers"], cfg["normalize"],
-                     cfg["init_std"], idle).to(device)
+                     cfg["init_std"], idle, cfg["features"]).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg["learning_rate"], eps=1e-5)
     agent_steps = 0
     curriculum = cfg["curriculum"]
@@ -138,7 +138,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             group["lr"] = cfg["learning_rate"] * max(frac, 1e-3)
 
         # ---- collect horizon decisions from every row
-        buf_obs = torch.zeros(horizon, rows, obs_dim)
+        buf_obs = torch.zeros(horizon, rows, model.input_dim)
         buf_raw_obs = np.zeros((horizon, rows, obs_dim), np.float32)
         buf_act, buf_logp = [], torch.zeros(horizon, rows)
         buf_rew, buf_val, buf_next_val = torch.zeros(horizon, rows), torch.zeros(horizon, rows), torch.zeros(horizon, rows)
@@ -176,7 +176,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             done=by_row(buf_done), terminated=by_row(buf_term))
         actions = torch.stack(buf_act)
         batch = TensorDict({
-            "observation": buf_obs.transpose(0, 1).reshape(rows * horizon, obs_dim),
+            "observation": buf_obs.transpose(0, 1).reshape(rows * horizon, model.input_dim),
             "action": actions.transpose(0, 1).reshape(rows * horizon, *actions.shape[2:]),
             "action_log_prob": buf_logp.transpose(0, 1).reshape(-1),
             "advantage": advantage.reshape(-1, 1),

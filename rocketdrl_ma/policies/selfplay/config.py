@@ -6,8 +6,9 @@
 - ``scripted``: scripted bots that are always in the pool (``ball_chaser``, ``goalie``, ``idle``).
 - ``self_play``: share of episodes against the current policy itself (not through PFSP).
 - ``weighting``, ``p``, ``window``: prioritised fictitious self-play over the pool (``pfsp.py``).
-- ``imitate``: ``{bot, opponent, decisions, epochs}``: clone a scripted bot before the first update
-  (``imitation.py``); empty: start from scratch.
+- ``imitate``: ``{bot, opponent, decisions, epochs, dagger_rounds, dagger_decisions}``: clone a scripted
+  bot before the first update, then refine the clone by DAgger rounds (``imitation.py``); empty: start
+  from scratch.
 """
 from __future__ import annotations
 

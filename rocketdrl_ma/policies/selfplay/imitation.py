@@ -1,24 +1,35 @@
-"""A warm start for self-play: behaviour cloning of a scripted bot before the first PPO update.
+"""A warm start for self-play: behaviour cloning of a scripted bot, then DAgger, before the first PPO update.
 
 From scratch, a 1v1 learner spends millions of steps learning to reach the ball; cloning the
 ball-chaser first (as AlphaStar started from supervised play) gives it a competent opponent-level
 policy to improve on. The bot plays env matches (``imitate.opponent`` on the other side), its
 observations and controls (encoded in the env's action format) are recorded, the observation
-normaliser is fitted to them, and the policy mean is regressed onto the bot's actions. Only the
-policy is cloned; the value function is learned by PPO as usual. Box action spaces only.
+normaliser is fitted to them, and the policy is fitted to the bot's actions: the Gaussian mean by
+squared error, the lookup table's logits by cross-entropy.
+
+A clone trained only on the bot's own states drifts into states the bot never visits and does not know
+what to do there. DAgger (Ross et al., 2011) fixes that: each round the clone drives (the bot takes over
+a decision with probability 1/2, 1/4, ... in rounds 1, 2, ...), every state it visits is labelled with
+what the bot would have done, and the policy is refitted on everything gathered so far. Only the policy
+is cloned; the value function is learned by PPO as usual.
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 import torch
 
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
-from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.scripted import make_scripted
 
-IMITATE_KEYS = {"bot": "ball_chaser", "opponent": "ball_chaser", "decisions": 30_000, "epochs": 20}
+if TYPE_CHECKING:  # the ppo package imports this module's config check, so no runtime import back
+    from rocketdrl_ma.policies.ppo.model import PPOModel
+
+IMITATE_KEYS = {"bot": "ball_chaser", "opponent": "ball_chaser", "decisions": 30_000, "epochs": 20,
+                "dagger_rounds": 0, "dagger_decisions": 10_000}
+POSITIVE_KEYS = ("decisions", "epochs", "dagger_decisions")
+DAGGER_EPOCHS = 15  # refit passes over the aggregate after each round (it only grows by a fraction)
 
 
 def check_imitate(section: object) -> dict[str, Any]:
@@ -36,18 +47,22 @@ def check_imitate(section: object) -> dict[str, Any]:
     for key in ("bot", "opponent"):
         if out[key] not in SCRIPTED_BOTS:
             raise ValueError(f"selfplay.imitate.{key}: {out[key]!r} is not one of {sorted(SCRIPTED_BOTS)}")
-    for key in ("decisions", "epochs"):
-        if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < 1:
-            raise ValueError(f"selfplay.imitate.{key}: expected an int >= 1, got {out[key]!r}")
+    for key in POSITIVE_KEYS + ("dagger_rounds",):
+        value, least = out[key], 0 if key == "dagger_rounds" else 1
+        if isinstance(value, bool) or not isinstance(value, int) or value < least:
+            raise ValueError(f"selfplay.imitate.{key}: expected an int >= {least}, got {value!r}")
     return out
 
 
-def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: int,
-            seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """(observations, actions) of ``bot`` over ``decisions`` env decisions, playing both sides in turn
-    (one sample per decision, two in a mirror match)."""
+def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: int, seed: int,
+            model: PPOModel | None = None, bot_share: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(observations, actions of ``bot``) over ``decisions`` env decisions, the recorded car on alternating
+    sides. Without ``model`` the bot drives and a mirror match (``opponent == bot``) records both cars;
+    with it (DAgger) ``model`` drives greedily, the bot in its stead with probability ``bot_share`` per
+    decision, and the bot's action is recorded as the label of every state."""
     env = RocketDRLParallelEnv(config, **overrides)
     player, other = make_scripted(bot), make_scripted(opponent)
+    rng = np.random.default_rng(seed)
     obs_rows, act_rows = [], []
     episode = 0
     obs, _ = env.reset(seed=seed)
@@ -57,36 +72,48 @@ def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: in
             side = ("blue", "orange")[episode % 2]
             actions = {}
             for agent in env.agents:
-                mine = agent.startswith(side) or opponent == bot  # a mirror match records both cars
-                act = env.action_parser.encode((player if mine else other).act(agent, state))
-                actions[agent] = act
+                mine = agent.startswith(side) or (model is None and opponent == bot)
+                label = env.action_parser.encode((player if mine else other).act(agent, state))
+                actions[agent] = label
                 if mine:
                     obs_rows.append(obs[agent])
-                    act_rows.append(act)
+                    act_rows.append(label)
+                    if model is not None and rng.random() >= bot_share:
+                        actions[agent] = _as_env_action(model, model.act_deterministic(obs[agent][None])[0])
             obs, _, _, _, _ = env.step(actions)
             if not env.agents:
                 episode += 1
                 obs, _ = env.reset()
     finally:
         env.close()
-    return np.asarray(obs_rows, np.float32), np.asarray(act_rows, np.float32)
+    dtype = np.float32 if np.ndim(act_rows[0]) else np.int64
+    return np.asarray(obs_rows, np.float32), np.asarray(act_rows, dtype)
+
+
+def _as_env_action(model: PPOModel, action: np.ndarray):
+    return int(action) if model.action["kind"] == "discrete" else action
+
+
+def _loss(model: PPOModel, x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
+    if model.action["kind"] == "box":
+        return torch.nn.functional.mse_loss(model.policy(x)[0], y)
+    return torch.nn.functional.cross_entropy(model.policy(x), y)
 
 
 def clone(model: PPOModel, obs: np.ndarray, actions: np.ndarray, epochs: int, batch_size: int = 512,
-          learning_rate: float = 1e-3, seed: int = 0) -> list[float]:
-    """Fit ``model``'s normaliser and policy mean to (obs, actions); the mean squared error of each epoch."""
-    if model.action["kind"] != "box":
-        raise ValueError("selfplay.imitate: behaviour cloning needs a Box action space (the continuous parser)")
+          learning_rate: float = 1e-3, seed: int = 0, fit_normaliser: bool = True) -> list[float]:
+    """Fit ``model``'s policy (and, unless told not to, its normaliser first) to (obs, actions); the
+    mean loss of each epoch (squared error for a Box policy, cross-entropy for a lookup table)."""
     generator = torch.Generator().manual_seed(seed)
     x_raw, y = torch.as_tensor(obs), torch.as_tensor(actions)
-    model.obs_norm.update(x_raw)
+    if fit_normaliser:
+        model.obs_norm.update(x_raw)
     optimizer = torch.optim.Adam(model.policy.parameters(), lr=learning_rate)
     losses = []
     for _ in range(epochs):
         total, batches = 0.0, 0
         for idx in torch.randperm(len(x_raw), generator=generator).split(batch_size):
-            loc, _ = model.policy(model.obs_norm(x_raw[idx]))
-            loss = torch.nn.functional.mse_loss(loc, y[idx])
+            loss = _loss(model, model.obs_norm(x_raw[idx]), y[idx])
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()
@@ -95,9 +122,33 @@ def clone(model: PPOModel, obs: np.ndarray, actions: np.ndarray, epochs: int, ba
     return losses
 
 
-def warm_start(model: PPOModel, cfg: dict[str, Any]) -> list[float]:
-    """Clone ``cfg["selfplay"]["imitate"]`` into ``model`` on the training env config."""
-    spec = cfg["selfplay"]["imitate"]
-    obs, actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"], spec["decisions"],
-                           cfg["seed"])
-    return clone(model, obs, actions, spec["epochs"], seed=cfg["seed"])
+def disagreement(model: PPOModel, obs: np.ndarray, actions: np.ndarray) -> float:
+    """How far the greedy clone is from the bot on these states: the share of differing lookup indices,
+    or the mean squared difference of Box actions."""
+    greedy = model.act_deterministic(obs)
+    if model.action["kind"] == "box":
+        return float(np.mean((greedy - actions) ** 2))
+    return float(np.mean(greedy != actions))
+
+
+def warm_start(model: PPOModel, cfg: dict[str, Any], log: Callable[[str], None] | None = None) -> dict[str, list]:
+    """Clone ``cfg["selfplay"]["imitate"]`` into ``model`` on the training env config, then run its DAgger
+    rounds. Returns the first fit's epoch losses and, per round, the clone's disagreement with the bot on
+    the states it visited itself (measured before that round's refit)."""
+    spec, seed = cfg["selfplay"]["imitate"], cfg["seed"]
+    obs, actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"], spec["decisions"], seed)
+    losses = clone(model, obs, actions, spec["epochs"], seed=seed)
+    if log:
+        log(f"imitation: cloned {spec['bot']} on {len(obs):,} samples, loss {losses[0]:.3f} -> {losses[-1]:.3f}")
+    rounds = []
+    for k in range(spec["dagger_rounds"]):
+        bot_share = 0.5 ** (k + 1)
+        new_obs, new_actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"],
+                                       spec["dagger_decisions"], seed + 1 + k, model, bot_share)
+        rounds.append(disagreement(model, new_obs, new_actions))
+        obs, actions = np.concatenate([obs, new_obs]), np.concatenate([actions, new_actions])
+        clone(model, obs, actions, DAGGER_EPOCHS, seed=seed + 1 + k, fit_normaliser=False)
+        if log:
+            log(f"imitation: DAgger round {k + 1}: disagreement on its own states {rounds[-1]:.3f}, "
+                f"refitted on {len(obs):,} samples")
+    return {"losses": losses, "dagger_disagreement": rounds}

@@ -64,7 +64,7 @@ class SelfPlayPool:
         for bot in self.sp["scripted"]:
             self._add(f"scripted:{bot}", make_scripted(bot))
         self.learner: PPOModel | None = None
-        self.imitation_losses: list[float] = []
+        self.imitation: dict[str, list] = {}  # the warm start's report (imitation.warm_start)
         self.next_snapshot = self.sp["snapshot_interval"]
         self.picks: dict[str, int] = {}
         self._learner_team = ["blue"] * len(self.envs)
@@ -83,7 +83,7 @@ class SelfPlayPool:
         self.learner = model
         if agent_steps == 0 and self.sp["imitate"]:  # a fresh run: start from the cloned bot
             from .imitation import warm_start
-            self.imitation_losses = warm_start(model, self.cfg)
+            self.imitation = warm_start(model, self.cfg, log=print)
         interval = self.sp["snapshot_interval"]
         self.next_snapshot = (agent_steps // interval + 1) * interval
         for path in self.snapshots()[-self.sp["pool_size"]:]:

