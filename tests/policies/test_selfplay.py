@@ -215,3 +215,14 @@ def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tm
     before = disagreement(model, obs, labels)
     clone(model, obs, labels, epochs=40, fit_normaliser=False)
     assert disagreement(model, obs, labels) < 0.5 * before
+
+
+def test_a_warm_started_run_keeps_the_clones_input_statistics(tmp_path):
+    """The normaliser is fitted once, on the imitation data, and PPO's own states do not move it: the clone's
+    weights only mean what they were fitted to under those statistics."""
+    cfg_path = tmp_path / "sp.yaml"
+    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml"), **TINY, "max_steps": 512,
+                                    "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 100, "epochs": 2}}}))
+    assert main(["train", str(cfg_path), "--run-dir", str(tmp_path / "run"), "--quiet"]) == 0
+    state = torch.load(tmp_path / "run" / "final.pt", weights_only=True)
+    assert abs(float(state["obs_norm.count"]) - 200.0) < 1e-3  # the mirror match's 2 x 100 samples, no more

@@ -127,6 +127,10 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
 
     if difficulty is not None:
         pool.set_difficulty(difficulty)
+    # A warm-started policy was fitted to inputs scaled by the imitation data's statistics. Fed with PPO's
+    # own states they drift (by up to 0.5 in mean and 1.5 in variance over 0.4M self-play steps), and the
+    # clone's weights under the drifted statistics lost what PPO's weights under the clone's kept: keep them.
+    frozen_norm = bool(cfg["selfplay"] and cfg["selfplay"]["imitate"])
     obs = pool.reset()
     bar = tqdm(total=cfg["max_steps"], initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps = time.monotonic(), agent_steps
@@ -164,7 +168,8 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
                 obs = step.obs
                 recent.extend(step.episodes)
                 since_summary.extend(step.episodes)
-        model.obs_norm.update(torch.as_tensor(buf_raw_obs.reshape(-1, obs_dim), device=device))
+        if not frozen_norm:
+            model.obs_norm.update(torch.as_tensor(buf_raw_obs.reshape(-1, obs_dim), device=device))
         agent_steps += horizon * rows
 
         # ---- advantages (torchrl's GAE wants [batch, time, 1])
