@@ -22,6 +22,10 @@ FEATURES = ("none", "car_local")
 
 N_CAR = len(CAR_FEATURES)
 N_BALL = len(BALL_FEATURES)
+# offsets inside a car block and the ball block, by the observation's feature names
+POS, VEL, ANG_VEL = (CAR_FEATURES.index(f"{v}_x") for v in ("pos", "vel", "ang_vel"))
+FORWARD, UP, PRESENT = CAR_FEATURES.index("forward_x"), CAR_FEATURES.index("up_x"), CAR_FEATURES.index("present")
+BALL_POS, BALL_VEL = BALL_FEATURES.index("pos_x"), BALL_FEATURES.index("vel_x")
 LOCAL_DISTANCE_UU = 2000.0  # scale of the local offsets (about a third of the field's half length)
 LOCAL_SPEED_UU_S = 2300.0   # scale of the local velocities (supersonic car speed)
 
@@ -45,25 +49,25 @@ class CarLocal(nn.Module):
         self.register_buffer("pos_scale", torch.as_tensor(POS_SCALE, dtype=torch.float32), persistent=False)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        pos = obs[:, 0:3] * self.pos_scale
-        vel = obs[:, 3:6] * CAR_VEL_SCALE
-        forward, up = obs[:, 9:12], obs[:, 12:15]
+        def block(at: int, n: int = 3) -> torch.Tensor:
+            return obs[:, at:at + n]
+
+        pos, vel = block(POS) * self.pos_scale, block(VEL) * CAR_VEL_SCALE
+        forward, up = block(FORWARD), block(UP)
         frame = torch.stack((forward, torch.linalg.cross(up, forward), up), dim=1)  # rows: forward, left, up
 
         def local(vec: torch.Tensor) -> torch.Tensor:
             return torch.einsum("nij,nj->ni", frame, vec)
 
-        ball_at = N_CAR
-        ball_pos = obs[:, ball_at:ball_at + 3] * self.pos_scale
-        ball_vel = obs[:, ball_at + 3:ball_at + 6] * BALL_VEL_SCALE
+        ball_pos = block(N_CAR + BALL_POS) * self.pos_scale
+        ball_vel = block(N_CAR + BALL_VEL) * BALL_VEL_SCALE
         blocks = [obs,
                   local(ball_pos - pos) / LOCAL_DISTANCE_UU, local(ball_vel - vel) / LOCAL_SPEED_UU_S,
-                  local(vel) / LOCAL_SPEED_UU_S, local(obs[:, 6:9])]  # ang_vel keeps its [-1, 1] scale
+                  local(vel) / LOCAL_SPEED_UU_S, local(block(ANG_VEL))]  # ang_vel keeps its [-1, 1] scale
         for k in range(self.n_others):
             at = N_CAR + N_BALL + k * N_CAR
-            present = obs[:, at + N_CAR - 1:at + N_CAR]
-            other_pos = obs[:, at:at + 3] * self.pos_scale
-            other_vel = obs[:, at + 3:at + 6] * CAR_VEL_SCALE
+            present = block(at + PRESENT, 1)
+            other_pos, other_vel = block(at + POS) * self.pos_scale, block(at + VEL) * CAR_VEL_SCALE
             blocks += [present * local(other_pos - pos) / LOCAL_DISTANCE_UU,
                        present * local(other_vel - vel) / LOCAL_SPEED_UU_S]
         return torch.cat(blocks, dim=1)

@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # the ppo package imports this module's config check, so no r
 
 IMITATE_KEYS = {"bot": "ball_chaser", "opponent": "ball_chaser", "decisions": 30_000, "epochs": 20,
                 "dagger_rounds": 0, "dagger_decisions": 10_000}
-POSITIVE_KEYS = ("decisions", "epochs", "dagger_decisions")
+INT_MINIMUMS = {"decisions": 1, "epochs": 1, "dagger_rounds": 0, "dagger_decisions": 1}
 DAGGER_EPOCHS = 15  # refit passes over the aggregate after each round (it only grows by a fraction)
 
 
@@ -47,8 +47,8 @@ def check_imitate(section: object) -> dict[str, Any]:
     for key in ("bot", "opponent"):
         if out[key] not in SCRIPTED_BOTS:
             raise ValueError(f"selfplay.imitate.{key}: {out[key]!r} is not one of {sorted(SCRIPTED_BOTS)}")
-    for key in POSITIVE_KEYS + ("dagger_rounds",):
-        value, least = out[key], 0 if key == "dagger_rounds" else 1
+    for key, least in INT_MINIMUMS.items():
+        value = out[key]
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise ValueError(f"selfplay.imitate.{key}: expected an int >= {least}, got {value!r}")
     return out
@@ -79,7 +79,7 @@ def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: in
                     obs_rows.append(obs[agent])
                     act_rows.append(label)
                     if model is not None and rng.random() >= bot_share:
-                        actions[agent] = _as_env_action(model, model.act_deterministic(obs[agent][None])[0])
+                        actions[agent] = model.act_deterministic(obs[agent][None])[0]
             obs, _, _, _, _ = env.step(actions)
             if not env.agents:
                 episode += 1
@@ -88,10 +88,6 @@ def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: in
         env.close()
     dtype = np.float32 if np.ndim(act_rows[0]) else np.int64
     return np.asarray(obs_rows, np.float32), np.asarray(act_rows, dtype)
-
-
-def _as_env_action(model: PPOModel, action: np.ndarray):
-    return int(action) if model.action["kind"] == "discrete" else action
 
 
 def _loss(model: PPOModel, x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:

@@ -2,8 +2,9 @@
 
 It has the interface of ``ppo.envs.EnvPool`` (rows are the learner's cars only), so the PPO trainer
 runs unchanged; the copies are the arenas of one ``VectorEnv``, copy ``i`` seeded with ``seed + i``. At
-each episode start a copy swaps the learner's side and draws its opponent: the current policy itself with probability ``self_play``, else PFSP over the pool (scripted bots and the
-newest ``pool_size`` snapshots). Opponent policies sample from their Gaussian (or categorical) like the
+each episode start a copy swaps the learner's side and draws its opponent: the current policy itself
+with probability ``self_play``, else PFSP over the pool (scripted bots and the newest ``pool_size``
+snapshots). Opponent policies sample from their Gaussian (or categorical) like the
 learner does, so past snapshots are played as the stochastic policies they were.
 """
 from __future__ import annotations
