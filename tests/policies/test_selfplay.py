@@ -226,3 +226,66 @@ def test_a_warm_started_run_keeps_the_clones_input_statistics(tmp_path):
     assert main(["train", str(cfg_path), "--run-dir", str(tmp_path / "run"), "--quiet"]) == 0
     state = torch.load(tmp_path / "run" / "final.pt", weights_only=True)
     assert abs(float(state["obs_norm.count"]) - 200.0) < 1e-3  # the mirror match's 2 x 100 samples, no more
+
+
+def test_kickstart_section_and_its_fading_weight():
+    from rocketdrl_ma.policies.selfplay.kickstart import teacher_weight
+
+    base = load_train_config("policies/selfplay_1v1.yaml")
+    for bad, match in (({"bot": "x"}, "selfplay.kickstart.bot"), ({"weight": 0}, "selfplay.kickstart.weight"),
+                       ({"decay_steps": 0}, "selfplay.kickstart.decay_steps"),
+                       ({"teacher": "goalie"}, r"selfplay.kickstart: unknown key\(s\) \['teacher'\]")):
+        with pytest.raises(ValueError, match=match):
+            validate_train_config({**base, "selfplay": {"kickstart": bad}})
+    spec = validate_train_config({**base, "selfplay": {"kickstart": {"weight": 2.0, "decay_steps": 1000}}})
+    spec = spec["selfplay"]["kickstart"]
+    assert [teacher_weight(spec, s) for s in (0, 250, 1000, 5000)] == [2.0, 1.5, 0.0, 0.0]
+    assert teacher_weight({**spec, "decay_steps": None}, 10**9) == 2.0 and teacher_weight({}, 0) == 0.0
+
+
+def test_teacher_labels_are_the_bots_rows_for_the_learners_cars_on_both_sides(tmp_path):
+    from rocketdrl_ma.policies.scripted import make_scripted
+
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
+                                 "env_overrides": {**TINY["env_overrides"], "action": "lookup"},
+                                 "selfplay": {**TINY["selfplay"], "kickstart": {"bot": "goalie"}}})
+    pool = SelfPlayPool(cfg, tmp_path)
+    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 32, 2, True)
+    pool.attach(model, 0)
+    pool.reset()
+    goalie, sides = make_scripted("goalie"), set()
+    for _ in range(60):
+        labels = pool.teacher_actions()
+        assert labels.shape == (pool.n_rows,) and labels.dtype.kind == "i"
+        for i, env in enumerate(pool.envs):
+            (agent,) = pool._learners(i)
+            sides.add(agent)
+            assert labels[i] == env.action_parser.encode(goalie.act(agent, env.game_state))
+        pool.step(np.random.default_rng(0).integers(0, 90, pool.n_rows))
+    assert sides == {"blue_0", "orange_0"}
+    pool.close()
+
+
+@pytest.mark.slow
+def test_kickstarting_pulls_the_learner_towards_the_teacher_on_its_own_states(tmp_path):
+    """The same short run with and without the teacher term: only the kickstarted learner ends up taking
+    the ball-chaser's rows in the states it drives into itself."""
+    from rocketdrl_ma.policies.ppo.checkpoint import load_model
+
+    far = {}
+    for name, kickstart in (("plain", {}), ("kickstart", {"bot": "ball_chaser", "weight": 5.0, "decay_steps": None})):
+        cfg_path = tmp_path / f"{name}.yaml"
+        cfg_path.write_text(json.dumps({
+            **load_train_config("policies/selfplay_1v1.yaml"), **TINY, "max_steps": 6144, "num_epoch": 8,
+            "batch_size": 64, "learning_rate": 1e-3, "hidden_units": 64, "features": "car_local",
+            "env_overrides": {**TINY["env_overrides"], "clock_s": 10.0, "action": "lookup"},
+            "selfplay": {**TINY["selfplay"], "kickstart": kickstart}}))
+        assert main(["train", str(cfg_path), "--run-dir", str(tmp_path / name), "--quiet"]) == 0
+        model, meta = load_model(tmp_path / name / "final.pt")
+        env_cfg = meta["env"]
+        obs, labels = collect(env_cfg["config"], env_cfg["overrides"], "ball_chaser", "ball_chaser", 400, 11, model,
+                              bot_share=0.0)
+        far[name] = disagreement(model, obs, labels)
+        if kickstart:  # what training measured on its own states, in the checkpoint's metrics
+            assert 0.0 <= meta["metrics"]["teacher_disagreement"] < 1.0 and meta["metrics"]["teacher_weight"] == 5.0
+    assert far["kickstart"] < 0.6 * far["plain"], far

@@ -26,6 +26,8 @@ from tqdm import tqdm
 
 from rocketdrl_ma.config import load_config
 from rocketdrl_ma.physics import CarControls
+from rocketdrl_ma.policies.selfplay.imitation import imitation_loss
+from rocketdrl_ma.policies.selfplay.kickstart import teacher_weight
 
 from .checkpoint import read_meta, resolve_checkpoint, save_checkpoint, sidecar
 from .envs import EnvPool
@@ -141,6 +143,10 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
         for group in optimizer.param_groups:
             group["lr"] = cfg["learning_rate"] * max(frac, 1e-3)
 
+        # ---- kickstarting: a scripted teacher's actions on the learner's states (policies/selfplay/kickstart.py)
+        kick_weight = teacher_weight(cfg["selfplay"].get("kickstart", {}), agent_steps)
+        buf_teacher, buf_greedy = [], []
+
         # ---- collect horizon decisions from every row
         buf_obs = torch.zeros(horizon, rows, model.input_dim)
         buf_raw_obs = np.zeros((horizon, rows, obs_dim), np.float32)
@@ -152,6 +158,10 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             for t in range(horizon):
                 x = model.obs_norm(torch.as_tensor(obs, device=device))
                 td = actor(TensorDict({"observation": x}, batch_size=[rows]))
+                if kick_weight:
+                    buf_teacher.append(torch.as_tensor(pool.teacher_actions()))
+                    greedy = td["logits"].argmax(-1) if "logits" in td.keys() else td["loc"].clamp(-1.0, 1.0)
+                    buf_greedy.append(greedy.cpu().numpy())
                 step = pool.step(env_actions(model.action, td["action"].cpu()))
                 buf_raw_obs[t], buf_obs[t] = obs, x.cpu()
                 buf_act.append(td["action"].cpu())
@@ -187,10 +197,19 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             "advantage": advantage.reshape(-1, 1),
             "value_target": value_target.reshape(-1, 1),
         }, batch_size=[rows * horizon], device=device)
+        if kick_weight:
+            teacher = torch.stack(buf_teacher)
+            batch["teacher_action"] = teacher.transpose(0, 1).reshape(rows * horizon, *teacher.shape[2:]).to(device)
 
         # ---- num_epoch passes of minibatch updates
         model.train()
-        losses = ppo_update(model, loss_module, optimizer, batch, cfg["num_epoch"], cfg["batch_size"])[-1]
+        losses = ppo_update(model, loss_module, optimizer, batch, cfg["num_epoch"], cfg["batch_size"], kick_weight)[-1]
+        if kick_weight:
+            greedy, labels = np.stack(buf_greedy), torch.stack(buf_teacher).numpy()
+            losses["teacher_weight"] = kick_weight
+            # how far the greedy learner was from the teacher on its own states (lookup: share of other rows)
+            losses["teacher_disagreement"] = float(np.mean(greedy != labels) if model.action["kind"] == "discrete"
+                                                   else np.mean((greedy - labels) ** 2))
         if hasattr(pool, "on_update"):
             pool.on_update(model, agent_steps, writer)
 
@@ -233,8 +252,9 @@ LOSS_KEYS = ("loss_objective", "loss_critic", "loss_entropy", "entropy")
 
 
 def ppo_update(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim.Optimizer, batch: TensorDict,
-               num_epoch: int, batch_size: int) -> list[dict[str, float]]:
-    """``num_epoch`` shuffled passes of minibatch steps over ``batch``; the mean losses of each pass."""
+               num_epoch: int, batch_size: int, teacher_weight: float = 0.0) -> list[dict[str, float]]:
+    """``num_epoch`` shuffled passes of minibatch steps over ``batch``; the mean losses of each pass. With a
+    ``teacher_weight``, the batch's ``teacher_action`` adds that much of the imitation loss (kickstarting)."""
     per_epoch = []
     for _ in range(num_epoch):
         sums: dict[str, float] = collections.defaultdict(float)
@@ -242,6 +262,10 @@ def ppo_update(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim
         for idx in minibatches:
             out_td = loss_module(batch[idx])
             loss = out_td["loss_objective"] + out_td["loss_critic"] + out_td["loss_entropy"]
+            if teacher_weight:
+                imitation = imitation_loss(model, batch["observation"][idx], batch["teacher_action"][idx])
+                loss = loss + teacher_weight * imitation
+                sums["loss_teacher"] += float(imitation.detach())
             optimizer.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(model.parameters(), 0.5)
@@ -284,7 +308,7 @@ def _log(writer, steps: int, success: float, ret: float, episodes: list, losses:
         writer.add_scalar("episode/return", ret, steps)
         writer.add_scalar("episode/length", float(np.mean([e.length for e in episodes])), steps)
     for key, value in losses.items():
-        writer.add_scalar(f"loss/{key}", value, steps)
+        writer.add_scalar(f"kickstart/{key}" if key.startswith("teacher_") else f"loss/{key}", value, steps)
     writer.add_scalar("perf/agent_steps_per_s", rate, steps)
     writer.add_scalar("train/learning_rate", optimizer.param_groups[0]["lr"], steps)
     writer.flush()

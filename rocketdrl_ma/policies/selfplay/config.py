@@ -9,17 +9,21 @@
 - ``imitate``: ``{bot, opponent, decisions, epochs, dagger_rounds, dagger_decisions}``: clone a scripted
   bot before the first update, then refine the clone by DAgger rounds (``imitation.py``); empty: start
   from scratch.
+- ``kickstart``: ``{bot, weight, decay_steps}``: a scripted teacher whose actions on the learner's own
+  states add a distillation term to PPO's loss, fading out over ``decay_steps`` (``kickstart.py``);
+  empty: none.
 """
 from __future__ import annotations
 
 from typing import Any
 
 from .imitation import check_imitate
+from .kickstart import check_kickstart
 from .pfsp import WEIGHTINGS
 
 SELFPLAY_DEFAULTS: dict[str, Any] = {"snapshot_interval": 200_000, "pool_size": 10, "scripted": ["ball_chaser"],
                                      "self_play": 0.2, "weighting": "hard", "p": 2.0, "window": 50,
-                                     "imitate": {}}
+                                     "imitate": {}, "kickstart": {}}
 
 
 def check_selfplay(section: object) -> dict[str, Any]:
@@ -55,4 +59,5 @@ def check_selfplay(section: object) -> dict[str, Any]:
                          f"got {bots!r}")
     out["scripted"] = list(bots)
     out["imitate"] = check_imitate(out["imitate"])
+    out["kickstart"] = check_kickstart(out["kickstart"])
     return out

@@ -90,7 +90,8 @@ def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: in
     return np.asarray(obs_rows, np.float32), np.asarray(act_rows, dtype)
 
 
-def _loss(model: PPOModel, x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
+def imitation_loss(model: PPOModel, x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
+    """How far the policy is from the bot's actions ``y`` on normalised inputs ``x``."""
     if model.action["kind"] == "box":
         return torch.nn.functional.mse_loss(model.policy(x)[0], y)
     return torch.nn.functional.cross_entropy(model.policy(x), y)
@@ -109,7 +110,7 @@ def clone(model: PPOModel, obs: np.ndarray, actions: np.ndarray, epochs: int, ba
     for _ in range(epochs):
         total, batches = 0.0, 0
         for idx in torch.randperm(len(x_raw), generator=generator).split(batch_size):
-            loss = _loss(model, model.obs_norm(x_raw[idx]), y[idx])
+            loss = imitation_loss(model, model.obs_norm(x_raw[idx]), y[idx])
             optimizer.zero_grad()
             loss.backward()
             optimizer.step()

@@ -64,6 +64,9 @@ class SelfPlayPool:
         self.opponents: dict[str, Any] = {}       # name -> PPOModel or scripted bot
         for bot in self.sp["scripted"]:
             self._add(f"scripted:{bot}", make_scripted(bot))
+        kickstart = self.sp["kickstart"]
+        # one teacher per copy: a bot may remember the game it is playing
+        self.teachers = [make_scripted(kickstart["bot"]) for _ in self.envs] if kickstart else []
         self.learner: PPOModel | None = None
         self.imitation: dict[str, list] = {}  # the warm start's report (imitation.warm_start)
         self.next_snapshot = self.sp["snapshot_interval"]
@@ -181,6 +184,15 @@ class SelfPlayPool:
             acts = sample_actions(model, obs)
             for n, (i, c) in enumerate(zip(copies, cols)):
                 actions[i, c] = acts[n * self.team_size:(n + 1) * self.team_size]
+
+    def teacher_actions(self) -> np.ndarray:
+        """The kickstart teacher's action (in the env's action format) for every learner row in its current
+        state: the labels of the distillation term (``kickstart.py``)."""
+        labels = []
+        for i, env in enumerate(self.envs):
+            state = env.game_state
+            labels += [env.action_parser.encode(self.teachers[i].act(agent, state)) for agent in self._learners(i)]
+        return np.asarray(labels)
 
     def step(self, actions: np.ndarray) -> StepResult:
         learner_actions = np.asarray(actions)
