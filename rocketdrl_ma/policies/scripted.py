@@ -1,4 +1,4 @@
-"""Scripted bots: a ball-chaser and a goalie, opponents and baselines for learned policies.
+"""Scripted bots: a ball-chaser, a stronger flip-chaser and a goalie, opponents and baselines for learned policies.
 
 They see the game the way the team-relative observation shows it to an agent (own car, ball, goals,
 all in the agent's team frame) and answer with ``CarControls``; nothing they use is hidden from a
@@ -93,6 +93,73 @@ class Goalie(ScriptedBot):
         return controls
 
 
+class FlipChaser(ScriptedBot):
+    """The ball-chaser's game with its losing habits fixed: it won 78 of 80 full 1v1 matches against the
+    ball-chaser, and 69 of 80 with both bots' controls through the lookup table.
+
+    - **Kickoff**: full boost straight at the ball and a forward dodge 0.2 s before contact, so it gets there
+      first and faster (the ball-chaser stops boosting 800 uu short of the ball).
+    - **From the wrong side** (nearer the opponent's goal than the ball) the ball-chaser aims 400 uu behind the
+      ball, through it and at its own goal; this bot aims 250 uu further to the ball's inner side (the field's
+      centre, or its own side for a central ball), so a touch on the way back knocks the ball wide.
+    - **No jumps at bouncing balls**: the ball-chaser's jump, with a dodge after it, lost matches when tried.
+    - **Lookup-table controls**: full steer or none, yaw with steer, throttle with boost, so every control is
+      a row of RLGym's 90-row table (``LookupTableActions``); the bot plays the same through it, and a lookup
+      clone can copy it exactly.
+    - **Never stuck**: it backs off a goal mouth's floor step and the back of a net and leaves a goal mouth
+      along y first (the step is the wall ramp's cut face at the posts' line), and jumps off a wall it lies
+      against on its side; cars driven by the ball-chaser's rules stood in both places for minutes.
+
+    Stateless: the dodge is sequenced from the car's own jump state (jump held, then released, then pressed
+    again with pitch), so one instance plays any number of cars and needs no reset.
+    """
+
+    name = "flip_chaser"
+    KICKOFF_DODGE_S = 0.2       # time to contact (uu to the ball's surface / speed) at which the kickoff jump starts
+    CONTACT_UU = 160.0          # car centre to ball centre at a front touch
+    STEER_DEADBAND_RAD = 0.05   # target within this angle: drive straight
+    DEFLECT_SIDE_UU, DEFLECT_BACK_UU = 250.0, 400.0
+
+    def act(self, agent: str, state: GameState) -> CarControls:
+        car = state.cars[agent]
+        if car.is_demoed:
+            return CarControls()
+        pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
+        vel = team_frame(agent, car.vel)
+        ball, ball_vel = team_frame(agent, state.ball.pos), team_frame(agent, state.ball.vel)
+        speed = float(vel @ rot[:, 0])
+        kickoff = abs(ball[0]) < 1.0 and abs(ball[1]) < 1.0 and float(np.linalg.norm(ball_vel)) < 1.0
+        if car.on_ground and rot[2, 2] < 0.5 and float(np.linalg.norm(vel)) < 200.0:
+            return _air_row(jump=True)  # on its side against a wall: wheels on the wall, driving cannot free it
+        if kickoff and not car.on_ground and car.has_jumped and not car.has_flipped:
+            # the dodge needs a fresh press: release the held jump first, then press it with pitch
+            return _ground_row(1.0, 0.0) if car.is_jumping else _air_row(pitch=-1.0, jump=True)
+        if kickoff:
+            angle, distance = _angle_distance(pos, rot, ball)
+            if speed > 1200.0 and (distance - self.CONTACT_UU) / speed < self.KICKOFF_DODGE_S:
+                return _air_row(jump=True, boost=True)
+            return _ground_row(1.0, self._steer(angle), boost=True)
+        lead = ball + ball_vel * min(float(np.linalg.norm(ball - pos)) / 2000.0, 0.6)
+        if pos[1] > ball[1] + 150.0:
+            inner = math.copysign(1.0, lead[0]) if abs(lead[0]) > 150.0 else -math.copysign(1.0, pos[0] - lead[0])
+            target = lead + np.array([-inner * self.DEFLECT_SIDE_UU, -self.DEFLECT_BACK_UU, 0.0])
+        else:
+            to_goal = ATTACK_GOAL - lead
+            target = lead - to_goal / np.linalg.norm(to_goal) * 110.0  # the ball-chaser's shot approach
+        return self._drive(pos, rot, _out_of_goal_mouth(pos, target), speed)
+
+    def _steer(self, angle: float) -> float:
+        return 0.0 if abs(angle) < self.STEER_DEADBAND_RAD else math.copysign(1.0, angle)
+
+    def _drive(self, pos: np.ndarray, rot: np.ndarray, target: np.ndarray, speed: float) -> CarControls:
+        """``drive_to``'s rules in lookup-table rows; reverses off a step or net it is nosing into."""
+        angle, distance = _angle_distance(pos, rot, target)
+        steer = self._steer(angle)
+        if (speed < 300.0 and _nose_blocked(pos, rot)) or (abs(angle) > 2.2 and distance < 1500.0):
+            return _ground_row(-1.0, -steer)
+        return _ground_row(1.0, steer, boost=abs(angle) < 0.25 and distance > 800.0, handbrake=1.3 < abs(angle) < 2.2)
+
+
 class Idle(ScriptedBot):
     """Does nothing: an empty net for shooting practice."""
 
@@ -106,7 +173,46 @@ def _team_rot(agent: str, rot: np.ndarray) -> np.ndarray:
     return rot if agent_team(agent) == 0 else np.diag([-1.0, -1.0, 1.0]) @ rot
 
 
-SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {cls.name: cls for cls in (BallChaser, Goalie, Idle)}
+def _ground_row(throttle: float, steer: float, boost: bool = False, handbrake: bool = False) -> CarControls:
+    """Driving controls as a row of the lookup table's ground part: yaw follows steer, boost means full throttle."""
+    return CarControls(throttle=1.0 if boost else throttle, steer=steer, yaw=steer, boost=boost, handbrake=handbrake)
+
+
+def _air_row(pitch: float = 0.0, jump: bool = False, boost: bool = False) -> CarControls:
+    """A jump or dodge as a row of the lookup table's air part: throttle follows boost, handbrake held on a dodge."""
+    return CarControls(throttle=1.0 if boost else 0.0, pitch=pitch, jump=jump, boost=boost,
+                       handbrake=jump and pitch != 0.0)
+
+
+def _angle_distance(pos: np.ndarray, rot: np.ndarray, target: np.ndarray) -> tuple[float, float]:
+    """Heading error to ``target`` on the floor (rad, positive: to the right) and the distance to it (uu)."""
+    local = rot.T @ (np.array([target[0], target[1], 0.0]) - pos)
+    return math.atan2(local[1], local[0]), float(np.hypot(local[0], local[1]))
+
+
+# The floor is flat through a goal mouth, but beside it (|x| > the goal's half width, within 400 uu of the back
+# wall) the wall's ramp begins with a vertical cut face at the posts' line: a step the wheels cannot climb.
+_MOUTH_Y = C.ARENA_EXTENT_Y - C.ARENA_FILLET_RADIUS - 70.0
+
+
+def _nose_blocked(pos: np.ndarray, rot: np.ndarray) -> bool:
+    """The car's nose is at a goal mouth's step, a net's side or the back of a net."""
+    nose = pos + rot[:, 0] * 120.0
+    in_mouth = abs(pos[1]) > _MOUTH_Y and abs(pos[0]) < C.GOAL_HALF_WIDTH
+    in_net = abs(pos[1]) > C.ARENA_EXTENT_Y - 50.0
+    return ((in_mouth and abs(nose[1]) > _MOUTH_Y + 50.0 and abs(nose[0]) > C.GOAL_HALF_WIDTH - 30.0)
+            or (in_net and abs(nose[0]) > C.GOAL_HALF_WIDTH - 30.0)
+            or abs(nose[1]) > C.ARENA_EXTENT_Y + C.GOAL_DEPTH - 30.0)
+
+
+def _out_of_goal_mouth(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """A car in a goal mouth bound for a target beside it leaves along y first, clear of the steps."""
+    if abs(pos[1]) > 4600.0 and abs(pos[0]) < C.GOAL_HALF_WIDTH + 50.0 and abs(target[0]) > C.GOAL_HALF_WIDTH - 150.0:
+        return np.array([np.clip(target[0], -600.0, 600.0), math.copysign(4450.0, pos[1]), 0.0])
+    return target
+
+
+SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {cls.name: cls for cls in (BallChaser, FlipChaser, Goalie, Idle)}
 
 
 def make_scripted(name: str) -> ScriptedBot:
