@@ -130,6 +130,8 @@ class LookupTableActions(ActionParser):
 
     def __init__(self):
         self.table = lookup_table()
+        self._signed_table = self.table.copy()  # buttons as +-1, as ``encode`` compares them
+        self._signed_table[:, 5:] = np.where(self.table[:, 5:] > 0, 1.0, -1.0)
 
     def space(self) -> spaces.Discrete:
         return spaces.Discrete(len(self.table))
@@ -149,15 +151,21 @@ class LookupTableActions(ActionParser):
         return CarControls(*r[:5], jump=r[5] > 0, boost=r[6] > 0, handbrake=r[7] > 0)
 
     def encode(self, controls: CarControls) -> int:
-        """The nearest row (L1 over the eight controls, buttons as +-1). Controls with no air input (pitch,
-        yaw and roll 0, as a driving bot gives) are matched as the table's ground rows are built, with yaw
-        following steer: otherwise every hard-steering row is one yaw off and a bot could not turn."""
+        """The nearest row with the same jump button (L1 over the eight controls, buttons as +-1), the
+        controls first put in the table's conventions: with no air input (pitch, yaw and roll 0, as a
+        driving bot gives) yaw follows steer, as in the ground rows, or every hard-steering row would be one
+        yaw off and a bot could not turn; a jump holds handbrake exactly when it has a direction, as in the
+        jump rows, or a dodge would be nearer the plain jump. The jump is kept whatever else differs: a
+        dropped press loses a jump or a dodge, a dropped steer only one decision's turn."""
         target = ContinuousActions().encode(controls).astype(np.float64)
-        if controls.pitch == controls.yaw == controls.roll == 0.0:
+        air_input = not controls.pitch == controls.yaw == controls.roll == 0.0
+        if not air_input:
             target[3] = target[1]
-        table = self.table.copy()
-        table[:, 5:] = np.where(table[:, 5:] > 0, 1.0, -1.0)
-        return int(np.argmin(np.abs(table - target).sum(axis=1)))
+        if controls.jump:
+            target[7] = 1.0 if air_input else -1.0
+        distance = np.abs(self._signed_table - target).sum(axis=1)
+        distance[self._signed_table[:, 5] != target[5]] = np.inf
+        return int(np.argmin(distance))
 
 
 ACTION_PARSERS: dict[str, type[ActionParser]] = {

@@ -131,6 +131,23 @@ def test_lookup_encodes_a_driving_bots_steering_to_both_sides():
     assert (drift.steer, drift.handbrake, drift.jump) == (1.0, True, False)
 
 
+def test_lookup_keeps_a_bots_jumps_and_dodges():
+    """A jump through the table stays a jump and a dodge stays a dodge in its direction: the nearest row by
+    the other controls was once the plain jump for every dodge, and a ground row for a jump while steering."""
+    p = LookupTableActions()
+    for pitch, roll in ((-1.0, 0.0), (1.0, 0.0), (0.0, -1.0), (0.0, 1.0), (-1.0, 1.0)):
+        for throttle in (0.0, 1.0):
+            dodge = p.parse("blue_0", p.encode(CarControls(throttle=throttle, pitch=pitch, roll=roll, jump=True)))
+            assert (dodge.jump, dodge.pitch, dodge.roll) == (True, pitch, roll), (throttle, pitch, roll)
+    for steer in (-1.0, -0.4, 0.0, 0.7, 1.0):
+        jump = p.parse("blue_0", p.encode(CarControls(throttle=1.0, steer=steer, jump=True)))
+        assert jump.jump and jump.pitch == jump.yaw == jump.roll == 0.0, steer
+    held = p.parse("blue_0", p.encode(CarControls(throttle=1.0, jump=True, boost=True)))
+    assert held.jump and held.boost
+    for i, row in enumerate(p.table):  # the table's own rows are their own nearest
+        assert p.encode(p.parse("blue_0", i)) == i
+
+
 def test_registry():
     assert set(ACTION_PARSERS) == {"seed", "continuous", "lookup"}
     assert all(issubclass(cls, ActionParser) for cls in ACTION_PARSERS.values())

@@ -24,7 +24,7 @@ TINY = {"env_overrides": {"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overtime_
 
 def test_selfplay_section_is_validated():
     base = load_train_config("policies/selfplay_1v1.yaml")
-    assert base["selfplay"]["scripted"] == ["ball_chaser", "goalie"]
+    assert base["selfplay"]["scripted"] == ["ball_chaser", "flip_chaser", "goalie"]
     raw = {k: v for k, v in base.items()}
     with pytest.raises(ValueError, match=r"selfplay: unknown key\(s\) \['poolsize'\]"):
         validate_train_config({**raw, "selfplay": {"poolsize": 3}})
