@@ -12,7 +12,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from rocketdrl_ma.league.config import validate_league_config
+from rocketdrl_ma.league.config import load_league_config, validate_league_config
+from rocketdrl_ma.league.play import play_local
 from rocketdrl_ma.league.ratings import rate
 from rocketdrl_ma.league.report import write_report
 from rocketdrl_ma.league.runner import run_league
@@ -124,3 +125,16 @@ def test_killed_league_resumes_without_losing_or_duplicating(tmp_path):
         keys = [r.match_key for r in store.results()]
     assert sorted(keys) == sorted(m.key for m in schedule(cfg))  # every match once, none lost
     assert run_league(cfg).played == 0  # a finished league plays nothing more
+
+
+def test_the_delivered_selfplay_policy_beats_the_ball_chaser_from_either_side():
+    """The committed 1v1 checkpoint, in the first two full 5-minute matches of its league (one per side):
+    a change to physics, observations or the lookup table that breaks what it learned shows up here."""
+    cfg = load_league_config(REPO / "leagues/selfplay_kickstart_vs_ball_chaser.yaml")
+    first_two = schedule(cfg)[:2]
+    assert {m.blue for m in first_two} == {"selfplay_kickstart", "ball_chaser"}
+    for match in first_two:
+        result = play_local(cfg, match)
+        goals = {match.blue: result.score_blue, match.orange: result.score_orange}
+        assert result.duration_s >= 300.0
+        assert goals["selfplay_kickstart"] > goals["ball_chaser"], (match.key, goals)
