@@ -91,7 +91,8 @@ def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session) -> MatchRe
         except BaseException as e:  # reported by the league thread below
             errors.append(e)
 
-    threads = [threading.Thread(target=run_bot, args=(slot, name, spec), daemon=True)
+    # not daemon threads: see ``remote.serve_invitations``
+    threads = [threading.Thread(target=run_bot, args=(slot, name, spec))
                for slot, (name, spec) in slots.items() if spec is not None]
     for t in threads:
         t.start()

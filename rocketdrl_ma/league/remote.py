@@ -72,8 +72,10 @@ def serve_invitations(session, server: str, entrant: str, make_bot: Callable[[],
             except queue.Empty:
                 continue
             reports: list = []
+            # Not daemon threads: Zenoh runs the callbacks a thread declares on a Python thread of the same
+            # daemon-ness, and a daemon one may wake in interpreter shutdown and abort the process.
             threads = [threading.Thread(target=lambda s=slot: reports.append(
-                make_bot().run(match_id, s, server=server, session=session)), daemon=True) for slot in slots]
+                make_bot().run(match_id, s, server=server, session=session))) for slot in slots]
             for t in threads:
                 t.start()
             for t in threads:
