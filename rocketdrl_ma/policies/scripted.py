@@ -17,6 +17,11 @@ from rocketdrl_ma.rules.state import GameState, agent_team
 
 ATTACK_GOAL = np.array([0.0, C.ARENA_EXTENT_Y + 200.0, 0.0])  # in the team frame: always +y
 OWN_GOAL = np.array([0.0, -C.ARENA_EXTENT_Y, 0.0])
+# drive_to's rules, also the flip-chaser's: reverse to a target behind and near, boost at one ahead and far,
+# powerslide through the turns between
+REVERSE_ANGLE_RAD, REVERSE_WITHIN_UU = 2.2, 1500.0
+BOOST_ANGLE_RAD, BOOST_BEYOND_UU = 0.25, 800.0
+SLIDE_ANGLE_RAD = 1.3
 
 
 def team_frame(agent: str, vec: np.ndarray) -> np.ndarray:
@@ -26,18 +31,17 @@ def team_frame(agent: str, vec: np.ndarray) -> np.ndarray:
 
 def drive_to(car_pos: np.ndarray, car_rot: np.ndarray, target: np.ndarray, speed_up: bool = True,
              arrive_uu: float = 0.0) -> CarControls:
-    """Steer at ``target``; boost when facing it and far; powerslide through sharp turns."""
-    local = car_rot.T @ (target - car_pos)
-    angle = math.atan2(local[1], local[0])  # positive: target to the right
-    distance = float(np.hypot(local[0], local[1]))
+    """Steer at ``target`` on the floor; boost when facing it and far; powerslide through sharp turns."""
+    angle, distance = _angle_distance(car_pos, car_rot, target)
     steer = float(np.clip(3.0 * angle, -1.0, 1.0))
     if distance < arrive_uu:
         return CarControls(throttle=0.0, steer=steer)
-    throttle = 1.0 if abs(angle) < 2.2 or distance > 1500.0 else -1.0
+    throttle = 1.0 if abs(angle) < REVERSE_ANGLE_RAD or distance > REVERSE_WITHIN_UU else -1.0
     if throttle < 0.0:
         steer = -steer
-    return CarControls(throttle=throttle, steer=steer, boost=speed_up and abs(angle) < 0.25 and distance > 800.0,
-                       handbrake=1.3 < abs(angle) < 2.2)
+    return CarControls(throttle=throttle, steer=steer,
+                       boost=speed_up and abs(angle) < BOOST_ANGLE_RAD and distance > BOOST_BEYOND_UU,
+                       handbrake=SLIDE_ANGLE_RAD < abs(angle) < REVERSE_ANGLE_RAD)
 
 
 class ScriptedBot(ABC):
@@ -155,9 +159,11 @@ class FlipChaser(ScriptedBot):
         """``drive_to``'s rules in lookup-table rows; reverses off a step or net it is nosing into."""
         angle, distance = _angle_distance(pos, rot, target)
         steer = self._steer(angle)
-        if (speed < 300.0 and _nose_blocked(pos, rot)) or (abs(angle) > 2.2 and distance < 1500.0):
+        behind_and_near = abs(angle) > REVERSE_ANGLE_RAD and distance < REVERSE_WITHIN_UU
+        if (speed < 300.0 and _nose_blocked(pos, rot)) or behind_and_near:
             return _ground_row(-1.0, -steer)
-        return _ground_row(1.0, steer, boost=abs(angle) < 0.25 and distance > 800.0, handbrake=1.3 < abs(angle) < 2.2)
+        return _ground_row(1.0, steer, boost=abs(angle) < BOOST_ANGLE_RAD and distance > BOOST_BEYOND_UU,
+                           handbrake=SLIDE_ANGLE_RAD < abs(angle) < REVERSE_ANGLE_RAD)
 
 
 class Idle(ScriptedBot):

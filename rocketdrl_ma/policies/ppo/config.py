@@ -32,7 +32,7 @@ from typing import Any
 
 import yaml
 
-from rocketdrl_ma.config import load_config, resolve_config_path
+from rocketdrl_ma.config import load_config, optional_section, resolve_config_path
 
 from rocketdrl_ma.policies.selfplay.config import check_selfplay
 
@@ -133,14 +133,9 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
 
 
 def _check_curriculum(curriculum: object) -> dict[str, float]:
-    if not isinstance(curriculum, dict):
-        raise ValueError(f"curriculum: expected a mapping with {sorted(CURRICULUM_KEYS)}, got {curriculum!r}")
-    if not curriculum:
-        return {}
-    unknown = sorted(set(curriculum) - set(CURRICULUM_KEYS))
-    if unknown:
-        raise ValueError(f"curriculum: unknown key(s) {unknown}; allowed: {sorted(CURRICULUM_KEYS)}")
-    out = {**CURRICULUM_KEYS, **curriculum}
+    out = optional_section("curriculum", curriculum, CURRICULUM_KEYS)
+    if not out:
+        return out
     for key, value in out.items():
         _check_number(f"curriculum.{key}", value, float)
         if not 0.0 <= value <= 1.0:

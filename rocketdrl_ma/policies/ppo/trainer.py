@@ -205,7 +205,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
         model.train()
         losses = ppo_update(model, loss_module, optimizer, batch, cfg["num_epoch"], cfg["batch_size"], kick_weight)[-1]
         if kick_weight:
-            greedy, labels = np.stack(buf_greedy), torch.stack(buf_teacher).numpy()
+            greedy, labels = np.stack(buf_greedy), teacher.numpy()
             losses["teacher_weight"] = kick_weight
             # how far the greedy learner was from the teacher on its own states (lookup: share of other rows)
             losses["teacher_disagreement"] = float(np.mean(greedy != labels) if model.action["kind"] == "discrete"

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from rocketdrl_ma.config import optional_section
+
 from .imitation import check_imitate
 from .kickstart import check_kickstart
 from .pfsp import WEIGHTINGS
@@ -30,14 +32,9 @@ def check_selfplay(section: object) -> dict[str, Any]:
     """Defaults filled in, every value checked; ValueError names the key and the allowed values."""
     from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
 
-    if not isinstance(section, dict):
-        raise ValueError(f"selfplay: expected a mapping with {sorted(SELFPLAY_DEFAULTS)}, got {section!r}")
-    if not section:
-        return {}
-    unknown = sorted(set(section) - set(SELFPLAY_DEFAULTS))
-    if unknown:
-        raise ValueError(f"selfplay: unknown key(s) {unknown}; allowed: {sorted(SELFPLAY_DEFAULTS)}")
-    out = {**SELFPLAY_DEFAULTS, **section}
+    out = optional_section("selfplay", section, SELFPLAY_DEFAULTS)
+    if not out:
+        return out
     for key in ("snapshot_interval", "pool_size", "window"):
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 import torch
 
+from rocketdrl_ma.config import optional_section
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.policies.scripted import make_scripted
 
@@ -36,14 +37,9 @@ def check_imitate(section: object) -> dict[str, Any]:
     """The ``selfplay.imitate`` mapping with defaults; empty: no warm start."""
     from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
 
-    if not isinstance(section, dict):
-        raise ValueError(f"selfplay.imitate: expected a mapping with {sorted(IMITATE_KEYS)}, got {section!r}")
-    if not section:
-        return {}
-    unknown = sorted(set(section) - set(IMITATE_KEYS))
-    if unknown:
-        raise ValueError(f"selfplay.imitate: unknown key(s) {unknown}; allowed: {sorted(IMITATE_KEYS)}")
-    out = {**IMITATE_KEYS, **section}
+    out = optional_section("selfplay.imitate", section, IMITATE_KEYS)
+    if not out:
+        return out
     for key in ("bot", "opponent"):
         if out[key] not in SCRIPTED_BOTS:
             raise ValueError(f"selfplay.imitate.{key}: {out[key]!r} is not one of {sorted(SCRIPTED_BOTS)}")

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from rocketdrl_ma.config import optional_section
+
 KICKSTART_KEYS: dict[str, Any] = {"bot": "ball_chaser", "weight": 1.0, "decay_steps": 5_000_000}
 
 
@@ -21,14 +23,9 @@ def check_kickstart(section: object) -> dict[str, Any]:
     """The ``selfplay.kickstart`` mapping with defaults; empty: no teacher."""
     from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
 
-    if not isinstance(section, dict):
-        raise ValueError(f"selfplay.kickstart: expected a mapping with {sorted(KICKSTART_KEYS)}, got {section!r}")
-    if not section:
-        return {}
-    unknown = sorted(set(section) - set(KICKSTART_KEYS))
-    if unknown:
-        raise ValueError(f"selfplay.kickstart: unknown key(s) {unknown}; allowed: {sorted(KICKSTART_KEYS)}")
-    out = {**KICKSTART_KEYS, **section}
+    out = optional_section("selfplay.kickstart", section, KICKSTART_KEYS)
+    if not out:
+        return out
     if out["bot"] not in SCRIPTED_BOTS:
         raise ValueError(f"selfplay.kickstart.bot: {out['bot']!r} is not one of {sorted(SCRIPTED_BOTS)}")
     weight = out["weight"]
