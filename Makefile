@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench venv clean
+.PHONY: demo test test-fast bench venv clean web-deps browser
 
 venv: $(STAMP)
 
@@ -13,18 +13,31 @@ $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e '.[train,test]'
+	$(PY) -m pip install --quiet -e '.[train,test,web]'
 	touch $(STAMP)
 
 demo: $(STAMP)
 	$(PY) -m rocketdrl_ma.cli play matches/1v1.yaml --blue ball_chaser --orange goalie --clock 60
 
+# The page of `rocketdrl-ma web`: three.js and msgpack from the npm registry, exactly as package-lock.json says.
+NODE_STAMP := node_modules/.installed
+web-deps: $(NODE_STAMP)
+
+$(NODE_STAMP): package.json package-lock.json
+	command -v npm >/dev/null || (apt-get update && apt-get install -y --no-install-recommends nodejs npm)
+	npm ci --no-audit --no-fund
+	touch $(NODE_STAMP)
+
+# The browser of tests/web: Debian's chromium (Playwright drives it; no `playwright install`).
+browser:
+	command -v chromium >/dev/null || (apt-get update && apt-get install -y --no-install-recommends chromium)
+
 # The whole suite, slow-marked tests included: correctness is never skipped.
-test: $(STAMP)
+test: $(STAMP) $(NODE_STAMP) browser
 	$(PY) -m pytest -q -p no:cacheprovider tests
 
 # Everything but the tests marked slow, for quick local iteration.
-test-fast: $(STAMP)
+test-fast: $(STAMP) $(NODE_STAMP) browser
 	$(PY) -m pytest -q -m "not slow" tests
 
 bench: $(STAMP)
@@ -33,4 +46,4 @@ bench: $(STAMP)
 	$(PY) benchmarks/fidelity.py
 
 clean:
-	rm -rf $(VENV) build *.egg-info
+	rm -rf $(VENV) build *.egg-info node_modules

@@ -1,4 +1,4 @@
-"""Command line: ``rocketdrl-ma play | serve | bot | watch | train | eval | league``.
+"""Command line: ``rocketdrl-ma play | serve | bot | watch | web | train | eval | league``.
 
 ``play`` runs a full match of a config between scripted bots, headless, with a progress bar, and prints
 the final score and the events (``make demo`` runs a 1v1 with a one-minute clock). The other commands
@@ -13,7 +13,7 @@ import importlib
 import sys
 
 COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.policies.commands", "rocketdrl_ma.server.commands",
-                                    "rocketdrl_ma.league.commands")
+                                    "rocketdrl_ma.league.commands", "rocketdrl_ma.web.commands")
 
 
 def play(config: str, blue: str, orange: str, video: str | None, seed: int, clock_s: float | None,

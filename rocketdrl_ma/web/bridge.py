@@ -1,0 +1,298 @@
+"""The page server: one port for the page's files (HTTP GET) and the page's websocket (``/ws``).
+
+The websocket speaks JSON requests in and msgpack messages out (``frames.py``). Requests:
+
+    {"op": "list"}                                  -> {"type": "list", "matches", "training", "replays", "zenoh"}
+    {"op": "watch", "kind": "match"|"train", "id"}  -> roster, then frames (at most ``max_rate`` a second),
+                                                       status changes, and the final message
+    {"op": "replay", "id"}                          -> {"type": "replay", "roster", "frames", ...}
+    {"op": "stop"}                                  -> stops following
+
+Read-only by construction: the page server never joins a match, never sends an action and publishes
+nothing on Zenoh; no request can reach a car. Requests for anything else get an error message.
+The page's own origin is the only one allowed to open the websocket, and the Host header must name the
+address the server listens on (no DNS rebinding onto a loopback page server).
+"""
+from __future__ import annotations
+
+import asyncio
+import ipaddress
+import json
+import logging
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from rocketdrl_ma.config import REPO_ROOT
+
+from .arena import arena_json
+from .feed import SOURCE_KINDS, FeedUpdate, SpectatorFeed
+from .frames import frame, pack_message, roster
+from .replays import ReplayLibrary
+
+log = logging.getLogger(__name__)
+STATIC_DIR = Path(__file__).parent / "static"
+MAX_STATES_PER_S = 30.0
+MAX_REQUEST_BYTES = 64 * 1024
+CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
+                 ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
+                 ".json": "application/json", ".png": "image/png", ".svg": "image/svg+xml"}
+
+
+def find_node_modules(extra: list[Path] = ()) -> Path:
+    """The ``node_modules`` holding three.js: given, the repository's (``npm ci`` there), or the working
+    directory's."""
+    for folder in [*extra, REPO_ROOT / "node_modules", Path.cwd() / "node_modules"]:
+        if (folder / "three" / "build" / "three.module.js").is_file():
+            return folder
+    raise ValueError("web: three.js is not installed; run `npm ci` in the repository (or `make web-deps`), or "
+                     "pass --node-modules PATH")
+
+
+def vendor_files(node_modules: Path) -> dict[str, Path]:
+    """URL path -> file of every front-end dependency the page imports (nothing else is served from there)."""
+    three = node_modules / "three"
+    files = {f"/vendor/three/{name}": three / "build" / name for name in ("three.module.js", "three.core.js")}
+    msgpack_dir = node_modules / "@msgpack" / "msgpack" / "dist.esm"
+    files.update({f"/vendor/msgpack/{p.relative_to(msgpack_dir).as_posix()}": p
+                  for p in sorted(msgpack_dir.rglob("*.mjs"))})
+    for url, path in files.items():
+        if not path.is_file():
+            raise ValueError(f"web: {path} is missing; run `npm ci` in the repository")
+    return files
+
+
+def is_loopback_host(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+@dataclass
+class FrameStats:
+    """What the bridge sent: frames, their sizes, and the send times of the last ones (the rate)."""
+    frames: int = 0
+    bytes_total: int = 0
+    bytes_max: int = 0
+    bytes_max_cars: int = 0
+    min_interval_s: float | None = None  # shortest time between two frames sent to one page
+    recent: deque = field(default_factory=lambda: deque(maxlen=600))
+
+    def add(self, n_bytes: int, n_cars: int, interval_s: float | None) -> None:
+        self.frames += 1
+        self.bytes_total += n_bytes
+        if n_bytes > self.bytes_max:
+            self.bytes_max, self.bytes_max_cars = n_bytes, n_cars
+        if interval_s is not None and (self.min_interval_s is None or interval_s < self.min_interval_s):
+            self.min_interval_s = interval_s
+        self.recent.append(time.monotonic())
+
+    def as_dict(self) -> dict:
+        times = list(self.recent)
+        span = times[-1] - times[0] if len(times) > 1 else 0.0
+        return {"frames": self.frames, "bytes_mean": self.bytes_total / self.frames if self.frames else None,
+                "bytes_max": self.bytes_max, "cars_in_largest": self.bytes_max_cars,
+                "min_interval_s": self.min_interval_s,
+                "states_per_s_recent": (len(times) - 1) / span if span > 0 else None}
+
+
+class PageServer:
+    """``await PageServer(...).serve(stop)`` serves until ``stop`` is set. ``feed`` opens lazily (and again
+    after a failure), so the page works for replays with no match server up."""
+
+    def __init__(self, make_feed: Callable[[], SpectatorFeed] | None, library: ReplayLibrary, *,
+                 host: str = "127.0.0.1", port: int = 8765, max_rate: float = MAX_STATES_PER_S,
+                 node_modules: Path | None = None):
+        if not 0 < max_rate <= MAX_STATES_PER_S:
+            raise ValueError(f"max_rate: states per second in (0, {MAX_STATES_PER_S:g}], got {max_rate!r}")
+        self.make_feed, self.library = make_feed, library
+        self.host, self.port, self.max_rate = host, port, float(max_rate)
+        self.files = {"/": STATIC_DIR / "index.html"}
+        self.files.update({f"/app/{p.name}": p for p in sorted(STATIC_DIR.iterdir()) if p.is_file()})
+        self.files.update(vendor_files(node_modules or find_node_modules()))
+        self.stats = FrameStats()
+        self._feed: SpectatorFeed | None = None
+        self._feed_error: str | None = None
+        self._feed_lock = asyncio.Lock()
+        self.bound_port: int | None = None
+
+    # -------------------------------------------------------------------------------------------- HTTP side
+    def _host_allowed(self, host_header: str) -> bool:
+        """A loopback page server answers only requests addressed to a loopback name (DNS rebinding)."""
+        if not is_loopback_host(self.host):
+            return True
+        name = host_header[1:].split("]", 1)[0] if host_header.startswith("[") else host_header.rsplit(":", 1)[0]
+        return is_loopback_host(name)
+
+    def _process_request(self, connection, request):
+        from websockets.datastructures import Headers
+        from websockets.http11 import Response
+
+        def respond(status: int, reason: str, body: bytes, content_type: str = "text/plain; charset=utf-8"):
+            headers = Headers([("Content-Type", content_type), ("Content-Length", str(len(body))),
+                               ("Cache-Control", "no-cache"), ("X-Content-Type-Options", "nosniff")])
+            return Response(status, reason, headers, body)
+
+        host = request.headers.get("Host", "")
+        if not self._host_allowed(host):
+            return respond(403, "Forbidden", f"host {host!r} is not this page server\n".encode())
+        path = request.path.split("?", 1)[0]
+        if path == "/ws":
+            origin = request.headers.get("Origin")
+            if origin is not None and origin not in (f"http://{host}", f"https://{host}"):
+                return respond(403, "Forbidden", b"websocket: only the page's own origin may connect\n")
+            return None  # the websocket handshake goes on
+        if path == "/arena.json":
+            return respond(200, "OK", arena_json(), CONTENT_TYPES[".json"])
+        if path == "/api/stats":
+            return respond(200, "OK", json.dumps(self.stats.as_dict()).encode(), CONTENT_TYPES[".json"])
+        file = self.files.get(path)
+        if file is None:
+            return respond(404, "Not Found", f"{path}: not found\n".encode())
+        return respond(200, "OK", file.read_bytes(), CONTENT_TYPES.get(file.suffix, "application/octet-stream"))
+
+    # -------------------------------------------------------------------------------------------- Zenoh side
+    async def _get_feed(self) -> SpectatorFeed | None:
+        if self.make_feed is None:
+            return None
+        async with self._feed_lock:
+            if self._feed is None:
+                try:
+                    self._feed = await asyncio.to_thread(lambda: self.make_feed().open())
+                    self._feed_error = None
+                except ValueError as e:  # no server or router reachable (yet): try again at the next request
+                    self._feed_error = str(e)
+            return self._feed
+
+    async def _list(self) -> dict:
+        feed = await self._get_feed()
+        matches, training = [], []
+        if feed is not None:
+            matches, training = await asyncio.gather(asyncio.to_thread(feed.matches),
+                                                     asyncio.to_thread(feed.training_runs))
+        return {"type": "list", "matches": matches, "training": training, "replays": self.library.list(),
+                "zenoh": {"server": feed.server if feed else None, "error": self._feed_error,
+                          "connected": feed is not None}}
+
+    # -------------------------------------------------------------------------------------------- websocket
+    async def _handler(self, ws) -> None:
+        follow: asyncio.Task | None = None
+        try:
+            async for message in ws:
+                try:
+                    if isinstance(message, bytes):
+                        raise ValueError("request: send JSON text, not binary")
+                    request = json.loads(message)
+                    if not isinstance(request, dict):
+                        raise ValueError("request: expected a JSON object")
+                    op = request.get("op")
+                    if op in ("watch", "replay", "stop") and follow is not None:
+                        follow.cancel()
+                        follow = None
+                    if op == "list":
+                        await ws.send(pack_message(await self._list()))
+                    elif op == "watch":
+                        kind, source_id = request.get("kind"), request.get("id")
+                        if kind not in SOURCE_KINDS:
+                            raise ValueError(f"kind: {kind!r} is not one of {list(SOURCE_KINDS)}")
+                        feed = await self._get_feed()
+                        if feed is None:
+                            raise ValueError(f"zenoh: no match server reachable ({self._feed_error})")
+                        follower = feed.follow(kind, source_id)
+                        follow = asyncio.create_task(self._pump(ws, follower, kind, source_id))
+                    elif op == "replay":
+                        reply = await asyncio.to_thread(self.library.open, request.get("id"))
+                        await ws.send(pack_message(reply))
+                    elif op == "stop":
+                        pass
+                    else:
+                        raise ValueError(f"op: {op!r} is not one of ['list', 'watch', 'replay', 'stop'] "
+                                         "(the page is read-only)")
+                except (ValueError, json.JSONDecodeError) as e:
+                    await ws.send(pack_message({"type": "error", "error": str(e)}))
+        finally:
+            if follow is not None:
+                follow.cancel()
+
+    async def _pump(self, ws, follower, kind: str, source_id: str) -> None:
+        """Send the newest state at most ``max_rate`` times a second (never two within one period), with
+        every event since the last one."""
+        period = 1.0 / self.max_rate
+        agents: list[str] | None = None
+        shown: tuple | None = None
+        events: list[dict] = []
+        last_sent: float | None = None
+        try:
+            await ws.send(pack_message({"type": "watching", "kind": kind, "id": source_id}))
+            while True:
+                update: FeedUpdate = follower.poll()
+                events += update.events
+                live = update.state
+                if live is not None:
+                    cast = roster(live.state, live.names)
+                    if cast["agents"] != agents:
+                        agents = cast["agents"]
+                        await ws.send(pack_message(cast))
+                    status = (live.status, live.info.get("iteration"), live.info.get("run"))
+                    if status != shown:
+                        shown = status
+                        await ws.send(pack_message({"type": "status", "status": live.status, "info": live.info,
+                                                    "scoreboard": live.scoreboard}))
+                    payload = pack_message(frame(live.state, agents, events))
+                    events = []
+                    now = time.monotonic()
+                    self.stats.add(len(payload), len(agents), None if last_sent is None else now - last_sent)
+                    last_sent = now
+                    await ws.send(payload)
+                if update.final is not None:
+                    final = {k: update.final.get(k) for k in ("status", "summary", "result_key", "info", "error")}
+                    await ws.send(pack_message({"type": "final", "events": events, **final}))
+                    events = []
+                    if kind == "match":
+                        return
+                # after a frame, a whole period; with nothing new, look again soon
+                await asyncio.sleep(period if live is not None else period / 4)
+        except asyncio.CancelledError:
+            raise
+        except Exception as e:  # a closed websocket, or a bug: the follower must go either way
+            if not isinstance(e, ConnectionError) and "ConnectionClosed" not in type(e).__name__:
+                log.exception("web: following %s %s failed", kind, source_id)
+        finally:
+            follower.close()
+
+    async def serve(self, stop: asyncio.Event, ready: Callable[["PageServer"], None] | None = None) -> None:
+        from websockets.asyncio.server import serve
+
+        async with serve(self._handler, self.host, self.port, process_request=self._process_request,
+                         compression=None, max_size=MAX_REQUEST_BYTES, server_header="rocketdrl-ma-web") as server:
+            self.bound_port = next(iter(server.sockets)).getsockname()[1]
+            if ready is not None:
+                ready(self)
+            await stop.wait()
+        if self._feed is not None:
+            await asyncio.to_thread(self._feed.close)
+            self._feed = None
+
+    def url(self) -> str:
+        host = self.host if ":" not in self.host else f"[{self.host}]"
+        return f"http://{host}:{self.bound_port or self.port}/"
+
+
+def run_page_server(server: PageServer, on_ready: Callable[[PageServer], None] | None = None) -> None:
+    """Serve until SIGINT or SIGTERM."""
+    import signal
+
+    async def main() -> None:
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, stop.set)
+        await server.serve(stop, on_ready)
+
+    asyncio.run(main())
+

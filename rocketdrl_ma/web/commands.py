@@ -1,0 +1,61 @@
+"""``rocketdrl-ma web``: the page server (standard library at the top: ``--help`` stays fast)."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+DEFAULT_CONNECT = "tcp/127.0.0.1:7447"
+
+
+def _zenoh_settings(args: argparse.Namespace):
+    from rocketdrl_ma.server.settings import ZenohSettings, load_zenoh_settings
+    if args.config:
+        return load_zenoh_settings(args.config)
+    return ZenohSettings(mode="client", connect=tuple(args.connect or [DEFAULT_CONNECT]))
+
+
+def _run_web(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from .bridge import PageServer, is_loopback_host, run_page_server
+    from .feed import SpectatorFeed
+    from .replays import ReplayLibrary
+
+    try:
+        if not is_loopback_host(args.host) and not args.allow_remote:
+            raise ValueError(f"--host: {args.host!r} is not loopback; pass --allow-remote to serve the page to "
+                             "other machines")
+        settings = None if args.no_zenoh else _zenoh_settings(args)
+        make_feed = None if settings is None else (lambda: SpectatorFeed(settings, args.server))
+        library = ReplayLibrary(args.replays if args.replays is not None else ["runs"], args.replay or [])
+        server = PageServer(make_feed, library, host=args.host, port=args.port, max_rate=args.max_rate,
+                            node_modules=Path(args.node_modules) if args.node_modules else None)
+    except ValueError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+
+    def ready(s: PageServer) -> None:
+        where = "no Zenoh" if settings is None else f"match server {args.server!r} via {list(settings.connect)}"
+        print(f"page at {s.url()} ({where}; replays from {[str(f) for f in library.folders + library.files]})",
+              flush=True)
+
+    run_page_server(server, ready)
+    return 0
+
+
+def add_commands(sub: argparse._SubParsersAction) -> None:
+    w = sub.add_parser("web", help="a page to watch live matches, replays and training runs in a browser")
+    w.add_argument("--host", default="127.0.0.1", help="address to serve the page on (default loopback only)")
+    w.add_argument("--port", type=int, default=8765, help="0: any free port")
+    w.add_argument("--allow-remote", action="store_true", help="needed for a non-loopback --host")
+    w.add_argument("--server", default="local", help="the match server's name (rocketdrl/<server>/...)")
+    w.add_argument("--config", default=None, help="a YAML with a zenoh: section (e.g. server/client.yaml)")
+    w.add_argument("--connect", action="append", default=None,
+                   help=f"Zenoh endpoint of the match server or router (client mode; default {DEFAULT_CONNECT})")
+    w.add_argument("--no-zenoh", action="store_true", help="replays only: no match server")
+    w.add_argument("--replays", action="append", default=None,
+                   help="a folder whose .npz replays the page lists (repeatable; default: runs)")
+    w.add_argument("--replay", action="append", default=None, help="one more replay file to list (repeatable)")
+    w.add_argument("--max-rate", type=float, default=30.0, help="states per second sent to a page (at most 30)")
+    w.add_argument("--node-modules", default=None, help="where `npm ci` installed three.js (default: the repo's)")
+    w.set_defaults(run=_run_web)

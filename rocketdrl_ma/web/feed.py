@@ -1,0 +1,143 @@
+"""The page server's one door to the Zenoh network: it lists a server's matches and the training runs that
+publish evaluation episodes, and follows one of them (its states and events), read-only.
+
+Nothing else in ``rocketdrl_ma.web`` touches Zenoh keys or payloads: when the match server offers a
+verified spectator API (signed states and events, authenticated spectators), this module is what changes.
+A follower keeps only the newest state (the page shows at most ``max_rate`` states a second, decoded on
+``poll``) but every event, so throttling never loses a goal.
+"""
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+from rocketdrl_ma.rules.state import GameState
+from rocketdrl_ma.server.bot import LobbyClient, ServerError, ServerGone
+from rocketdrl_ma.server.protocol import Keys, ProtocolError, check_name, decode_state, unpack
+from rocketdrl_ma.server.settings import ZenohSettings
+from rocketdrl_ma.server.watch import MAX_STATE_BYTES
+
+from .training import TrainingKeys
+
+SOURCE_KINDS = ("match", "train")
+
+
+@dataclass
+class LiveState:
+    """One published state: the game, the scoreboard, the match status and who plays each slot."""
+    state: GameState
+    scoreboard: dict
+    status: str
+    decision: int
+    names: dict[str, str] = field(default_factory=dict)
+    info: dict = field(default_factory=dict)  # a training run's iteration and run name
+
+
+@dataclass
+class FeedUpdate:
+    """What arrived since the last poll: the newest state (or None), every event, the final message."""
+    state: LiveState | None
+    events: list[dict]
+    final: dict | None
+    errors: int  # payloads that did not decode (dropped)
+
+
+class Follower:
+    """Follows one source's state and events keys until ``close``."""
+
+    def __init__(self, session, state_key: str, events_key: str):
+        self._lock = threading.Lock()
+        self._latest: bytes | None = None
+        self._events: list[bytes] = []
+        self._declared = [session.declare_subscriber(state_key, self._on_state),
+                          session.declare_subscriber(events_key, self._on_events)]
+
+    def _on_state(self, sample) -> None:
+        payload = sample.payload.to_bytes()
+        with self._lock:
+            self._latest = payload
+
+    def _on_events(self, sample) -> None:
+        payload = sample.payload.to_bytes()
+        with self._lock:
+            self._events.append(payload)
+
+    def poll(self) -> FeedUpdate:
+        with self._lock:
+            latest, raw_events, self._latest, self._events = self._latest, self._events, None, []
+        errors, state, events, final = 0, None, [], None
+        if latest is not None:
+            try:
+                message = unpack(latest, MAX_STATE_BYTES)
+                slots = message.get("slots") or {}
+                state = LiveState(decode_state(message["state"]), dict(message.get("scoreboard") or {}),
+                                  str(message.get("status", "running")), int(message.get("decision", 0)),
+                                  {slot: str(s.get("bot") or s.get("occupant") or slot) for slot, s in slots.items()
+                                   if isinstance(s, dict)},
+                                  dict(message.get("info") or {}))
+            except (ProtocolError, KeyError, TypeError, ValueError):
+                errors += 1
+        for raw in raw_events:
+            try:
+                message = unpack(raw, MAX_STATE_BYTES)
+            except ProtocolError:
+                errors += 1
+                continue
+            if message.get("final"):
+                final = message
+            events += [e for e in message.get("events") or () if isinstance(e, dict)]
+        return FeedUpdate(state, events, final, errors)
+
+    def close(self) -> None:
+        for declared in reversed(self._declared):
+            try:
+                declared.undeclare()
+            except Exception:  # the session may be closing already
+                pass
+        self._declared = []
+
+
+class SpectatorFeed:
+    """A Zenoh session that reads one match server's lobby list, its matches and the training runs."""
+
+    def __init__(self, zenoh: ZenohSettings, server: str = "local", lobby_timeout_s: float = 2.0):
+        self.settings, self.server = zenoh, check_name("server", server)
+        self.keys, self.training_keys = Keys(server), TrainingKeys(server)
+        self.lobby_timeout_s = lobby_timeout_s
+        self.session = None
+
+    def open(self) -> "SpectatorFeed":
+        self.session = self.settings.open()
+        return self
+
+    def close(self) -> None:
+        if self.session is not None:
+            self.session.close()
+            self.session = None
+
+    def matches(self) -> list[dict]:
+        """The lobby's list (id, status, mode, config, score...); empty when no server answers."""
+        try:
+            return LobbyClient(self.session, self.server, self.lobby_timeout_s).list()
+        except (ServerGone, ServerError):
+            return []
+
+    def training_runs(self) -> list[dict]:
+        """Training runs publishing evaluation episodes now (their liveliness tokens)."""
+        runs = []
+        for reply in self.session.liveliness().get(self.training_keys.all_alive, timeout=self.lobby_timeout_s):
+            if reply.ok is not None:
+                run = self.training_keys.parse_alive(str(reply.ok.key_expr))
+                if run is not None:
+                    runs.append({"id": run, "status": "training"})
+        return sorted(runs, key=lambda r: r["id"])
+
+    def follow(self, kind: str, source_id: Any) -> Follower:
+        """Follow a match (``kind="match"``) or a training run's evaluation episodes (``"train"``)."""
+        if kind not in SOURCE_KINDS:
+            raise ValueError(f"kind: {kind!r} is not one of {list(SOURCE_KINDS)}")
+        source_id = check_name("id", source_id)
+        if kind == "match":
+            return Follower(self.session, self.keys.state(source_id), self.keys.events(source_id))
+        return Follower(self.session, self.training_keys.state(source_id), self.training_keys.events(source_id))

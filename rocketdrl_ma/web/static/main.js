@@ -1,0 +1,287 @@
+// The page: lists what can be watched, follows one source over the websocket, draws it and its HUD.
+// Read-only: the only requests it can send are list, watch, replay and stop.
+import { decode } from "@msgpack/msgpack";
+import { TRAIL_POINTS, View } from "./scene.js";
+import { FLAG_DEMOED, Timeline } from "./timeline.js";
+
+const $ = (id) => document.getElementById(id);
+const view = new View($("view"));
+const timeline = new Timeline();
+const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
+let socket = null, roster = null, source = null, lastList = null, status = null, hudHidden = false;
+
+// ------------------------------------------------------------------------------------------- websocket
+function send(request) { if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(request)); }
+
+function connect() {
+  socket = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+  socket.binaryType = "arraybuffer";
+  socket.onopen = () => { send({ op: "list" }); openFromHash(); };
+  socket.onmessage = (event) => onMessage(event.data);
+  socket.onclose = () => {
+    $("connection").textContent = "page server gone; reconnecting…";
+    setTimeout(connect, 2000);
+  };
+}
+
+function onMessage(data) {
+  const message = decode(new Uint8Array(data));
+  const now = performance.now() / 1000;
+  switch (message.type) {
+    case "list": showList(message); break;
+    case "watching": timeline.startLive(); setTitle(`${message.kind === "train" ? "training run" : "match"} ${message.id}`); break;
+    case "roster": setRoster(message); break;
+    case "status": status = message; setTitle(); break;
+    case "frame":
+      stats.frames += 1; stats.bytesLast = data.byteLength; stats.bytesMax = Math.max(stats.bytesMax, data.byteLength);
+      stats.arrivals.push(now);
+      timeline.pushLive(message, now);
+      break;
+    case "final":
+      timeline.addEvents(message.events);
+      status = { ...(status || {}), status: message.status, final: true, info: message.info || (status || {}).info };
+      setTitle();
+      break;
+    case "replay": openReplay(message); break;
+    case "error": console.warn(`page server: ${message.error}`); setTitle(`error: ${message.error}`); break;
+    default: console.warn(`page server: unknown message ${message.type}`);
+  }
+}
+
+// ------------------------------------------------------------------------------------------- lists
+function item(text, detail, active, onClick) {
+  const li = document.createElement("li");
+  li.textContent = text;
+  if (detail) { const small = document.createElement("small"); small.textContent = detail; li.append(small); }
+  if (active) li.classList.add("active");
+  li.addEventListener("click", onClick);
+  return li;
+}
+
+function showList(list) {
+  lastList = list;
+  const z = list.zenoh;
+  $("connection").textContent = z.connected ? `match server "${z.server}"` : (z.error ? "no match server reachable" : "replays only");
+  const isActive = (kind, id) => source && source.kind === kind && source.id === id;
+  const score = (s) => (s ? ` ${s.blue ?? s[0]}-${s.orange ?? s[1]}` : "");
+  $("list-matches").replaceChildren(...(list.matches.length ? list.matches.map((m) =>
+    item(m.id, `${m.status} · ${m.mode} · ${m.config}${score(m.score)}`, isActive("match", m.id),
+      () => watch("match", m.id))) : [item("none", null, false, () => {})]));
+  $("list-training").replaceChildren(...(list.training.length ? list.training.map((r) =>
+    item(r.id, "publishing evaluation episodes", isActive("train", r.id), () => watch("train", r.id)))
+    : [item("none", null, false, () => {})]));
+  $("list-replays").replaceChildren(...(list.replays.length ? list.replays.map((r) =>
+    item(r.id, `${(r.bytes / 1024).toFixed(0)} kB · ${new Date(r.mtime * 1000).toLocaleString()}`,
+      isActive("replay", r.id), () => openReplayById(r.id))) : [item("none", null, false, () => {})]));
+}
+
+function watch(kind, id) {
+  source = { kind, id };
+  location.hash = `${kind}=${encodeURIComponent(id)}`;
+  status = null;
+  $("timeline").hidden = true;
+  timeline.startLive();
+  send({ op: "watch", kind, id });
+  if (lastList) showList(lastList);
+}
+
+function openReplayById(id) {
+  source = { kind: "replay", id };
+  location.hash = `replay=${encodeURIComponent(id)}`;
+  status = null;
+  setTitle(`loading replay ${id}…`);
+  send({ op: "replay", id });
+  if (lastList) showList(lastList);
+}
+
+function openFromHash() {
+  const m = /^#(match|train|replay)=(.+)$/.exec(location.hash);
+  if (!m) return;
+  const id = decodeURIComponent(m[2]);
+  if (m[1] === "replay") openReplayById(id); else watch(m[1], id);
+}
+
+// ------------------------------------------------------------------------------------------- replays
+function openReplay(message) {
+  setRoster(message.roster);
+  timeline.loadReplay(message.frames, message.frames.length ? message.frames[0].r : 120);
+  status = { status: "replay", info: {} };
+  setTitle(`replay ${message.id} · ${message.frames.length} states`);
+  const seek = $("seek");
+  seek.min = timeline.firstTick; seek.max = timeline.lastTick; seek.value = timeline.firstTick;
+  $("timeline").hidden = false;
+  $("speed").value = "1";
+  timeline.speed = 1;
+}
+
+$("play").addEventListener("click", () => togglePlay());
+$("step-back").addEventListener("click", () => timeline.step(-1));
+$("step-forward").addEventListener("click", () => timeline.step(1));
+$("seek").addEventListener("input", (e) => { timeline.playing = false; timeline.seek(Number(e.target.value)); });
+$("speed").addEventListener("change", (e) => { timeline.speed = Number(e.target.value); });
+
+function togglePlay() {
+  if (timeline.live) return;
+  if (!timeline.playing && timeline.playhead >= timeline.lastTick) timeline.seek(timeline.firstTick);
+  timeline.playing = !timeline.playing;
+}
+
+// ------------------------------------------------------------------------------------------- HUD
+function setRoster(r) {
+  roster = r;
+  view.setRoster(r);
+  for (const team of [0, 1]) {
+    const panel = $(team === 0 ? "boost-blue" : "boost-orange");
+    panel.replaceChildren(...r.agents.map((agent, i) => {
+      if (r.teams[i] !== team) return null;
+      const div = document.createElement("div");
+      div.className = "car-boost"; div.dataset.index = i;
+      div.innerHTML = `<span class="name"></span> <b class="amount"></b><div class="bar"><div class="fill"></div></div>`;
+      div.querySelector(".name").textContent = r.names[i] === agent ? agent : `${agent} · ${r.names[i]}`;
+      return div;
+    }).filter(Boolean));
+  }
+  const cams = [["broadcast", "Broadcast"], ["top", "Top-down"], ...r.agents.map((a, i) => [`chase:${i}`, `Chase ${a}`])];
+  $("cameras").replaceChildren(...cams.map(([mode, label]) => {
+    const b = document.createElement("button");
+    b.textContent = label; b.dataset.mode = mode;
+    b.addEventListener("click", () => setCamera(mode));
+    return b;
+  }));
+  markCamera();
+}
+
+function setCamera(mode) {
+  if (mode.startsWith("chase:")) view.setCamera("chase", Number(mode.slice(6))); else view.setCamera(mode);
+  markCamera();
+}
+
+function markCamera() {
+  const current = view.cameraMode === "chase" ? `chase:${view.chaseIndex}` : view.cameraMode;
+  for (const b of $("cameras").children) b.classList.toggle("active", b.dataset.mode === current);
+}
+
+function setTitle(text) {
+  if (text !== undefined) { setTitle.base = text; }
+  let line = setTitle.base || "";
+  if (status && status.status && status.status !== "replay") line += ` · ${status.status}`;
+  if (status && status.info && status.info.iteration !== undefined) line += ` · iteration ${status.info.iteration}`;
+  $("title").textContent = line;
+}
+
+function clock(seconds, overtime) {
+  const s = Math.max(0, overtime ? Math.floor(seconds) : Math.ceil(seconds));
+  return `${overtime ? "+" : ""}${Math.floor(s / 60)}:${String(s % 60).padStart(2, "0")}`;
+}
+
+function describe(e) {
+  const name = (agent) => {
+    if (!roster || !agent) return agent || "nobody";
+    const i = roster.agents.indexOf(agent);
+    return i >= 0 && roster.names[i] !== agent ? `${agent} (${roster.names[i]})` : agent;
+  };
+  const team = (agent) => (agent && agent.startsWith("orange") ? "orange" : "blue");
+  switch (e.kind) {
+    case "goal": return [`GOAL ${e.team}: ${name(e.scorer)}${e.own_goal ? " (own goal)" : ""}`, `goal ${e.team}`];
+    case "save": return [`save by ${name(e.agent)}`, team(e.agent)];
+    case "demo": return [`${name(e.agent)} demolished ${name(e.victim)}`, team(e.agent)];
+    case "shot": return [`shot by ${name(e.agent)}`, team(e.agent)];
+    case "overtime": return ["OVERTIME", ""];
+    case "miss": return [`miss (${e.reason})`, ""];
+    default: return [e.kind, ""];
+  }
+}
+
+let shownFeed = "";
+function updateHud(s) {
+  if (!s) return;
+  $("score-blue").textContent = s.s[0];
+  $("score-orange").textContent = s.s[1];
+  $("clock").textContent = clock(s.c, s.o);
+  $("overtime").hidden = !s.o;
+  document.querySelectorAll(".car-boost").forEach((div) => {
+    const car = s.a[Number(div.dataset.index)];
+    const boost = car ? Math.round(car[7]) : 0;
+    div.querySelector(".amount").textContent = car ? boost : "–";
+    div.querySelector(".fill").style.width = `${car ? car[7] : 0}%`;
+    div.classList.toggle("demoed", !!car && (car[8] & FLAG_DEMOED) !== 0);
+  });
+  const events = timeline.shownEvents(8);
+  const key = events.map((e) => `${e.kind}${e.tick}${e.agent || e.scorer || ""}`).join("|");
+  if (key !== shownFeed) {
+    shownFeed = key;
+    $("feed").replaceChildren(...events.map((e) => {
+      const [text, cls] = describe(e);
+      const li = document.createElement("li");
+      li.textContent = `${clock(e.tick / (s.r || 120), true).replace("+", "")}  ${text}`;
+      if (cls) li.className = cls;
+      return li;
+    }));
+  }
+  if (!timeline.live && timeline.frames.length) {
+    $("seek").value = Math.round(timeline.playhead);
+    const t0 = timeline.firstTick, rate = timeline.tickRate;
+    $("time").textContent = `${clock((timeline.playhead - t0) / rate, true).replace("+", "")} / ` +
+      `${clock((timeline.lastTick - t0) / rate, true).replace("+", "")}`;
+    $("play").textContent = timeline.playing ? "Pause" : "Play";
+  }
+}
+
+// ------------------------------------------------------------------------------------------- keys
+window.addEventListener("keydown", (e) => {
+  if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+  if (e.key === "1") setCamera("broadcast");
+  else if (e.key === "2") setCamera("top");
+  else if (e.key === "3" && roster && roster.agents.length) {
+    setCamera(`chase:${view.cameraMode === "chase" ? (view.chaseIndex + 1) % roster.agents.length : view.chaseIndex}`);
+  } else if (e.key === " ") { togglePlay(); e.preventDefault(); }
+  else if (e.key === "ArrowRight") timeline.step(1);
+  else if (e.key === "ArrowLeft") timeline.step(-1);
+  else if (e.key === "h") { hudHidden = !hudHidden; $("hud").classList.toggle("hidden", hudHidden); }
+});
+
+setInterval(() => send({ op: "list" }), 3000);
+
+// ------------------------------------------------------------------------------------------- loop
+let last = performance.now() / 1000, shown = null;
+function loop() {
+  const now = performance.now() / 1000;
+  const dt = Math.min(now - last, 0.25);
+  const started = performance.now();
+  last = now;
+  timeline.advance(dt, now);
+  shown = timeline.current();
+  if (shown) view.setObstacles(shown.x);
+  view.draw(shown, now, dt, shown ? timeline.trail(TRAIL_POINTS, 0.6) : []);
+  updateHud(shown);
+  stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
+  stats.renders.push(now);
+  while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
+  while (stats.arrivals.length && stats.arrivals[0] < now - 2) stats.arrivals.shift();
+  requestAnimationFrame(loop);
+}
+
+function rate(times) {
+  return times.length > 1 ? (times.length - 1) / (times[times.length - 1] - times[0]) : 0;
+}
+
+// A small read-only hook for tests and debugging: what the view shows, never a way to change the game.
+window.__view = {
+  ready: false,
+  ballPosition: () => (shown ? [...shown.b] : null),
+  score: () => (shown ? [...shown.s] : null),
+  hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],
+  tick: () => timeline.playhead,
+  frameIndex: () => timeline.index(),
+  mode: () => (source ? source.kind : null),
+  roster: () => roster,
+  stats: () => ({ fps: rate(stats.renders), statesPerS: rate(stats.arrivals), frames: stats.frames,
+    bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs }),
+};
+
+fetch("/arena.json").then((r) => r.json()).then((arena) => {
+  view.setArena(arena);
+  window.__view.ready = true;
+  connect();
+  requestAnimationFrame(loop);
+});

@@ -1,0 +1,294 @@
+// The 3D view in uu with z up, as the physics: the arena mesh the page server exports from
+// physics/arena_geometry.py, boost pads, cars built from their hitboxes, the ball and its trail, cameras.
+import * as THREE from "three";
+import { FLAG_BOOSTING, FLAG_DEMOED, FLAG_SUPERSONIC } from "./timeline.js";
+
+THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
+
+export const TEAM_COLORS = [0x2f7bff, 0xff8a1c];
+export const TRAIL_POINTS = 24;
+
+function arenaMeshes(arena) {
+  // Colour the physics' triangles by where they are: floor, goal boxes (by team) and the rest of the shell.
+  const v = arena.vertices, tris = arena.triangles, backY = arena.field.extent_y;
+  const groups = { floor: [], shell: [], goal0: [], goal1: [] };
+  for (let i = 0; i < tris.length; i += 3) {
+    const ids = [tris[i], tris[i + 1], tris[i + 2]];
+    const zs = ids.map((k) => v[3 * k + 2]), ys = ids.map((k) => v[3 * k + 1]);
+    let group = "shell";
+    if (zs.every((z) => z < 1)) group = "floor";
+    else if (ys.every((y) => y >= backY - 1)) group = "goal1";   // orange defends +y
+    else if (ys.every((y) => y <= -backY + 1)) group = "goal0";  // blue defends -y
+    groups[group].push(...ids);
+  }
+  const positions = new THREE.Float32BufferAttribute(v, 3);
+  const make = (ids) => {
+    const g = new THREE.BufferGeometry();
+    g.setAttribute("position", positions);
+    g.setIndex(ids);
+    g.computeVertexNormals();
+    return g;
+  };
+  const out = new THREE.Group();
+  out.add(new THREE.Mesh(make(groups.floor), new THREE.MeshLambertMaterial({ color: 0x2d5a3a })));
+  // Faces point into the field: from a camera outside it, the near walls and the ceiling are culled away.
+  out.add(new THREE.Mesh(make(groups.shell), new THREE.MeshLambertMaterial({
+    color: 0x7d8fb3, transparent: true, opacity: 0.28, depthWrite: false })));
+  for (const team of [0, 1]) {
+    out.add(new THREE.Mesh(make(groups[`goal${team}`]), new THREE.MeshLambertMaterial({
+      color: TEAM_COLORS[team], transparent: true, opacity: 0.45, depthWrite: false, side: THREE.DoubleSide })));
+  }
+  const edges = new THREE.EdgesGeometry(make([...groups.shell, ...groups.goal0, ...groups.goal1]), 25);
+  out.add(new THREE.LineSegments(edges, new THREE.LineBasicMaterial({ color: 0xb8c4dd, transparent: true,
+    opacity: 0.35 })));
+  return out;
+}
+
+function fieldLines(arena) {
+  const pts = [], x = arena.field.extent_x - 420, y = arena.field.extent_y - 420, z = 2;
+  pts.push(-x, 0, z, x, 0, z);
+  for (let i = 0; i < 64; i++) {
+    const a = (i / 64) * 2 * Math.PI, b = ((i + 1) / 64) * 2 * Math.PI;
+    pts.push(1000 * Math.cos(a), 1000 * Math.sin(a), z, 1000 * Math.cos(b), 1000 * Math.sin(b), z);
+  }
+  const g = new THREE.BufferGeometry();
+  g.setAttribute("position", new THREE.Float32BufferAttribute(pts, 3));
+  return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: 0xcfe8d6, transparent: true, opacity: 0.5 }));
+}
+
+function makePads(arena) {
+  const group = new THREE.Group(), pads = [];
+  for (const [x, y, , big] of arena.pads) {
+    const r = big ? arena.pad_radius.big * 0.5 : arena.pad_radius.small * 0.45;
+    const pad = new THREE.Mesh(new THREE.CylinderGeometry(r, r, 10, big ? 24 : 12),
+      new THREE.MeshBasicMaterial({ color: 0xffc93c }));
+    pad.rotation.x = Math.PI / 2;
+    pad.position.set(x, y, 6);
+    group.add(pad);
+    let orb = null;
+    if (big) {
+      orb = new THREE.Mesh(new THREE.SphereGeometry(60, 16, 12),
+        new THREE.MeshBasicMaterial({ color: 0xffb020, transparent: true, opacity: 0.75 }));
+      orb.position.set(x, y, 120);
+      group.add(orb);
+    }
+    pads.push({ pad, orb, lit: true });
+  }
+  return { group, pads };
+}
+
+// A car from its hitbox (length, width, height, offset): body, cabin, nose, wheels, boost flame.
+function makeCar(hitbox, team) {
+  const [l, w, h, ox, oy, oz] = hitbox;
+  const color = TEAM_COLORS[team];
+  const car = new THREE.Group();
+  const body = new THREE.Group();
+  body.position.set(ox, oy, oz);
+  car.add(body);
+  const paint = new THREE.MeshLambertMaterial({ color, emissive: color, emissiveIntensity: 0.35 });
+  const chassis = new THREE.Mesh(new THREE.BoxGeometry(l, w, h * 0.55), paint);
+  chassis.position.z = -h * 0.12;
+  body.add(chassis);
+  const cabin = new THREE.Mesh(new THREE.BoxGeometry(l * 0.45, w * 0.8, h * 0.45),
+    new THREE.MeshLambertMaterial({ color: 0x1b2330 }));
+  cabin.position.set(-l * 0.1, 0, h * 0.3);
+  body.add(cabin);
+  const spoiler = new THREE.Mesh(new THREE.BoxGeometry(l * 0.08, w, h * 0.12), paint);
+  spoiler.position.set(-l * 0.47, 0, h * 0.32);
+  body.add(spoiler);
+  const tyre = new THREE.MeshLambertMaterial({ color: 0x111111 });
+  for (const sx of [0.32, -0.32]) for (const sy of [0.5, -0.5]) {
+    const wheel = new THREE.Mesh(new THREE.CylinderGeometry(h * 0.42, h * 0.42, w * 0.18, 14), tyre);
+    wheel.position.set(sx * l, sy * w, -h * 0.35);
+    body.add(wheel);
+  }
+  const flame = new THREE.Mesh(new THREE.ConeGeometry(w * 0.2, l * 0.7, 12),
+    new THREE.MeshBasicMaterial({ color: 0xffa53a, transparent: true, opacity: 0.85,
+      blending: THREE.AdditiveBlending, depthWrite: false }));
+  flame.rotation.z = Math.PI / 2; // the cone's tip (+y) points backwards (-x)
+  flame.position.set(-l * 0.5 - l * 0.33, 0, -h * 0.05);
+  flame.visible = false;
+  body.add(flame);
+  const wreck = new THREE.Mesh(new THREE.SphereGeometry(l * 0.6, 12, 10),
+    new THREE.MeshBasicMaterial({ color: 0x555555, transparent: true, opacity: 0.5, depthWrite: false }));
+  wreck.visible = false;
+  return { car, body, flame, wreck, demoedAt: null };
+}
+
+export class View {
+  constructor(canvas) {
+    this.canvas = canvas;
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: false, powerPreference: "high-performance" });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 1.5));
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(0x0d1117);
+    this.scene.add(new THREE.HemisphereLight(0xdde6ff, 0x203020, 1.6));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.4);
+    sun.position.set(-3000, -2000, 8000);
+    this.scene.add(sun);
+    this.camera = new THREE.PerspectiveCamera(55, 1, 20, 40000);
+    this.cameraMode = "broadcast";
+    this.chaseIndex = 0;
+    this.cars = [];
+    this.roster = null;
+    this.camTarget = new THREE.Vector3();
+    this.camPos = new THREE.Vector3(-9000, 0, 4500);
+    this.obstacles = new THREE.Group();
+    this.scene.add(this.obstacles);
+  }
+
+  setArena(arena) {
+    this.arena = arena;
+    this.scene.add(arenaMeshes(arena));
+    this.scene.add(fieldLines(arena));
+    const { group, pads } = makePads(arena);
+    this.scene.add(group);
+    this.pads = pads;
+    const r = arena.ball_radius;
+    this.ball = new THREE.Mesh(new THREE.SphereGeometry(r, 24, 16),
+      new THREE.MeshLambertMaterial({ color: 0xf2f2f2, emissive: 0x555555 }));
+    this.scene.add(this.ball);
+    this.ballShadow = new THREE.Mesh(new THREE.CircleGeometry(r, 24),
+      new THREE.MeshBasicMaterial({ color: 0x000000, transparent: true, opacity: 0.35, depthWrite: false }));
+    this.ballShadow.position.z = 3;
+    this.scene.add(this.ballShadow);
+    const g = new THREE.BufferGeometry();
+    g.setAttribute("position", new THREE.Float32BufferAttribute(new Float32Array(TRAIL_POINTS * 3), 3));
+    g.setAttribute("color", new THREE.Float32BufferAttribute(new Float32Array(TRAIL_POINTS * 3), 3));
+    this.trailLine = new THREE.Line(g, new THREE.LineBasicMaterial({ vertexColors: true, transparent: true }));
+    this.trailLine.frustumCulled = false;
+    this.scene.add(this.trailLine);
+  }
+
+  setRoster(roster) {
+    for (const c of this.cars) { this.scene.remove(c.car); this.scene.remove(c.wreck); }
+    this.roster = roster;
+    this.cars = roster.agents.map((_, i) => {
+      const c = makeCar(roster.hitboxes[i], roster.teams[i]);
+      this.scene.add(c.car);
+      this.scene.add(c.wreck);
+      return c;
+    });
+    this.chaseIndex = Math.min(this.chaseIndex, Math.max(0, this.cars.length - 1));
+  }
+
+  setCamera(mode, index) {
+    this.cameraMode = mode;
+    if (index !== undefined) this.chaseIndex = index;
+  }
+
+  resize() {
+    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
+    if (this.canvas.width !== Math.floor(w * this.renderer.getPixelRatio()) || this._h !== h) {
+      this.renderer.setSize(w, h, false);
+      this.camera.aspect = w / Math.max(h, 1);
+      this.camera.updateProjectionMatrix();
+      this._h = h;
+    }
+  }
+
+  // Draw the sampled state `s` (timeline.sample) at wall time `now` (s).
+  // `trail`: the ball's recent positions, newest first.
+  draw(s, now, dt, trail) {
+    this.resize();
+    if (s && this.ball) this.apply(s, now, trail);
+    this.updateCamera(s, dt);
+    this.renderer.render(this.scene, this.camera);
+  }
+
+  apply(s, now, trailPoints) {
+    const [bx, by, bz] = s.b;
+    this.ball.position.set(bx, by, bz);
+    this.ballShadow.position.set(bx, by, 3);
+    this.ballShadow.material.opacity = Math.max(0.08, 0.4 - bz / 5000);
+    const pos = this.trailLine.geometry.attributes.position, col = this.trailLine.geometry.attributes.color;
+    const trail = trailPoints || [];
+    for (let i = 0; i < TRAIL_POINTS; i++) {
+      const p = trail[Math.min(i, trail.length - 1)] || [bx, by, bz]; // newest first
+      const k = 1 - Math.min(i, trail.length - 1) / TRAIL_POINTS;
+      pos.setXYZ(i, p[0], p[1], p[2]);
+      col.setXYZ(i, 0.05 + 0.9 * k, 0.05 + 0.85 * k, 0.08 + 0.6 * k);
+    }
+    pos.needsUpdate = true; col.needsUpdate = true;
+    if (this.pads) {
+      const mask = BigInt(s.p);
+      this.pads.forEach((p, i) => {
+        const lit = ((mask >> BigInt(i)) & 1n) === 1n;
+        if (lit !== p.lit) {
+          p.lit = lit;
+          p.pad.material.color.set(lit ? 0xffc93c : 0x3a3f47);
+          if (p.orb) p.orb.visible = lit;
+        }
+      });
+    }
+    this.cars.forEach((c, i) => {
+      const car = s.a[i];
+      if (!car) { c.car.visible = false; c.wreck.visible = false; return; }
+      const demoed = (car[8] & FLAG_DEMOED) !== 0;
+      if (demoed) {
+        if (c.demoedAt === null) { c.demoedAt = now; c.wreck.position.copy(c.car.position); }
+        const age = now - c.demoedAt;
+        c.car.visible = false;
+        c.wreck.visible = age < 1.2;
+        c.wreck.scale.setScalar(1 + age * 1.5);
+        c.wreck.material.opacity = Math.max(0, 0.55 - age * 0.45);
+        return;
+      }
+      c.demoedAt = null;
+      c.wreck.visible = false;
+      c.car.visible = true;
+      c.car.position.set(car[0], car[1], car[2]);
+      c.car.quaternion.set(car[3], car[4], car[5], car[6]);
+      const boosting = (car[8] & FLAG_BOOSTING) !== 0;
+      c.flame.visible = boosting;
+      if (boosting) {
+        const flicker = 0.85 + 0.3 * Math.sin(now * 60 + i);
+        const fast = (car[8] & FLAG_SUPERSONIC) !== 0 ? 1.3 : 1;
+        c.flame.scale.set(1, flicker * fast, 1);
+      }
+    });
+  }
+
+  setObstacles(list) {
+    const key = JSON.stringify(list || []);
+    if (key === this._obstacleKey) return;
+    this._obstacleKey = key;
+    this.obstacles.clear();
+    for (const [cx, cy, cz, hx, hy, hz] of list || []) {
+      const box = new THREE.Mesh(new THREE.BoxGeometry(2 * hx, 2 * hy, 2 * hz),
+        new THREE.MeshLambertMaterial({ color: 0x9aa4b2, transparent: true, opacity: 0.6 }));
+      box.position.set(cx, cy, cz);
+      this.obstacles.add(box);
+    }
+  }
+
+  updateCamera(s, dt) {
+    const cam = this.camera, ball = this.ball ? this.ball.position : new THREE.Vector3();
+    const follow = 1 - Math.exp(-dt * 4);
+    let pos, target, up = new THREE.Vector3(0, 0, 1);
+    const chased = this.cameraMode === "chase" && this.cars[this.chaseIndex];
+    if (this.cameraMode === "top") {
+      pos = new THREE.Vector3(0, 0, 12500);
+      target = new THREE.Vector3(0, 0, 0);
+      up = new THREE.Vector3(-1, 0, 0); // the field's length across the screen, blue's goal on the left
+    } else if (chased && chased.car.visible) {
+      const car = chased.car.position;
+      const away = new THREE.Vector3(car.x - ball.x, car.y - ball.y, 0);
+      if (away.lengthSq() < 1) away.set(-1, 0, 0);
+      away.normalize();
+      pos = new THREE.Vector3(car.x + away.x * 520, car.y + away.y * 520, car.z + 230);
+      target = new THREE.Vector3().copy(ball).lerp(car, 0.25);
+    } else {
+      // beside the field (+x, so blue's goal is on the left), level with the ball along its length
+      pos = new THREE.Vector3(ball.x * 0.5 + 4600, ball.y * 0.9, 1900 + ball.z * 0.4);
+      target = new THREE.Vector3(ball.x, ball.y, 100 + ball.z * 0.6);
+    }
+    const snap = this.cameraMode !== this._lastMode;
+    this._lastMode = this.cameraMode;
+    this.camPos.lerp(pos, snap ? 1 : follow);
+    this.camTarget.lerp(target, snap ? 1 : follow);
+    cam.position.copy(this.camPos);
+    cam.up.copy(up);
+    cam.lookAt(this.camTarget);
+  }
+}

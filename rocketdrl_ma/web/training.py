@@ -1,0 +1,186 @@
+"""Watch a policy while it trains: every ``watch_every`` iterations the trainer hands the current policy to
+``TrainingBroadcast``, which plays one evaluation episode with it in a thread of its own and publishes it
+at real-time pace on Zenoh, where the page (``rocketdrl-ma web``) lists the run next to the live matches.
+
+Keys (``<server>`` as for the match server, ``<run>`` the run's name)::
+
+    rocketdrl/<server>/train/<run>/alive    liveliness token held while the run trains
+    rocketdrl/<server>/train/<run>/state    each decision of the episode: the match server's state message
+                                            plus ``info`` (run, iteration)
+    rocketdrl/<server>/train/<run>/events   events, and the episode's final message
+
+The session is a peer that connects to the given endpoints (the match server's, by default) and listens on
+nothing; with no server up it keeps retrying in the background and training never waits for it. Each
+episode is also kept as a replay (``<replay_dir>/iter_<N>.npz``) the page can open later.
+"""
+from __future__ import annotations
+
+import copy
+import logging
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rocketdrl_ma.policies.registry import ObservingPolicy, Policy
+from rocketdrl_ma.server.protocol import check_name, encode_state, pack, pack_value, pack_with_raw
+from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
+
+log = logging.getLogger(__name__)
+
+
+class TrainingKeys:
+    """The key expressions of the training runs of one server name (see the module docstring)."""
+
+    def __init__(self, server: str):
+        self.root = f"rocketdrl/{check_name('server', server)}/train"
+        self.all_alive = f"{self.root}/*/alive"
+
+    def state(self, run: str) -> str:
+        return f"{self.root}/{run}/state"
+
+    def events(self, run: str) -> str:
+        return f"{self.root}/{run}/events"
+
+    def alive(self, run: str) -> str:
+        return f"{self.root}/{run}/alive"
+
+    def parse_alive(self, key: str) -> str | None:
+        prefix, suffix = self.root + "/", "/alive"
+        if key.startswith(prefix) and key.endswith(suffix) and "/" not in key[len(prefix):-len(suffix)]:
+            return key[len(prefix):-len(suffix)]
+        return None
+
+
+class ModelPolicy(ObservingPolicy):
+    """A frozen copy of a PPO model (anything with ``act_deterministic`` and ``action``) playing greedily
+    through the observation builder and action parser of the env config it trains on."""
+
+    def __init__(self, model: Any, env_config: dict):
+        from rocketdrl_ma.env.actions import make_action_parser
+        from rocketdrl_ma.env.observations import make_obs_builder
+
+        obs_spec, act_spec = dict(env_config["observation"]), dict(env_config["action"])
+        super().__init__(make_obs_builder(obs_spec.pop("name"), **obs_spec),
+                         make_action_parser(act_spec.pop("name"), **act_spec))
+        self.model = copy.deepcopy(model).eval()  # the trainer goes on changing its own weights meanwhile
+        self.name = "training policy"
+
+    def act(self, obs: np.ndarray) -> np.ndarray | int:
+        action = self.model.act_deterministic(obs[None])[0]
+        return int(action) if self.model.action["kind"] == "discrete" else action
+
+
+class TrainingBroadcast:
+    """Publishes an evaluation episode of the training policy every ``every`` iterations.
+
+    ``due(iteration)`` says whether this iteration publishes; ``publish(iteration, policy)`` starts the
+    episode (a ``Policy`` from ``policies/registry.py`` playing every car) unless the previous one is still
+    playing, and returns whether it started. ``close()`` ends the episode in flight and leaves Zenoh.
+    """
+
+    def __init__(self, env_config: str | dict, run: str, every: int, *, env_overrides: dict | None = None,
+                 server: str = "local", connect: tuple[str, ...] | list[str] = (DEFAULT_ENDPOINT,),
+                 zenoh: ZenohSettings | None = None, replay_dir: str | Path | None = None, seed: int = 20_000,
+                 speed: float = 1.0):
+        if isinstance(every, bool) or not isinstance(every, int) or every < 1:
+            raise ValueError(f"watch_every: expected an int >= 1 (iterations between episodes), got {every!r}")
+        if not (isinstance(speed, (int, float)) and speed > 0):
+            raise ValueError(f"speed: expected a number > 0, got {speed!r}")
+        self.env_config, self.env_overrides = env_config, dict(env_overrides or {})
+        self.run, self.every, self.seed, self.speed = check_name("run", run), every, seed, float(speed)
+        self.keys = TrainingKeys(server)
+        self.replay_dir = Path(replay_dir) if replay_dir is not None else None
+        self.settings = zenoh or ZenohSettings(mode="peer", listen=(), connect=tuple(connect))
+        self.session = self.settings.open()
+        self._token = self.session.liveliness().declare_token(self.keys.alive(self.run))
+        self._state_pub = self.session.declare_publisher(self.keys.state(self.run), express=True)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.published: list[int] = []  # iterations whose episode played to its end
+
+    def due(self, iteration: int) -> bool:
+        return iteration > 0 and iteration % self.every == 0
+
+    def busy(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def publish(self, iteration: int, policy: Policy) -> bool:
+        if self.busy() or self._stop.is_set():
+            return False
+        # Not a daemon: a Zenoh call on a daemon thread woken in interpreter shutdown aborts the process.
+        self._thread = threading.Thread(target=self._play, args=(iteration, policy), name=f"watch-{self.run}")
+        self._thread.start()
+        return True
+
+    def wait(self, timeout_s: float | None = None) -> None:
+        """Until the episode in flight has been published (tests, and runs that end)."""
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+
+    def _play(self, iteration: int, policy: Policy) -> None:
+        import rocketdrl_ma
+        from rocketdrl_ma.server.slots import ControlsPassThrough
+
+        env = rocketdrl_ma.parallel_env(self.env_config, **self.env_overrides)
+        try:
+            env.action_parser = ControlsPassThrough(env.action_parser)  # the policy gives CarControls
+            env.reset(seed=self.seed + iteration)
+            if self.replay_dir is not None:
+                self.replay_dir.mkdir(parents=True, exist_ok=True)
+                env.start_replay(self.replay_dir / f"iter_{iteration:06d}.npz")
+            policy.reset(env.game_state)
+            period_s = env.tick_skip / env.game_state.tick_rate / self.speed
+            info = {"run": self.run, "iteration": iteration}
+            slots = {agent: {"bot": f"{policy.name} @ iteration {iteration}", "occupant": "train"}
+                     for agent in env.possible_agents}
+            start, decision = time.monotonic(), 0
+            while env.agents and not self._stop.is_set():
+                self._send(env, decision, info, slots, done=False)
+                state = env.game_state
+                env.step({agent: policy.controls(agent, state) for agent in env.agents})
+                decision += 1
+                self._stop.wait(max(0.0, start + decision * period_s - time.monotonic()))
+            self._send(env, decision, info, slots, done=True)
+            self.session.put(self.keys.events(self.run),
+                             pack({"match": self.run, "decision": decision, "final": True, "info": info,
+                                   "status": "stopped" if self._stop.is_set() else "finished",
+                                   "summary": env.rules.summary()}))
+            if not self._stop.is_set():
+                self.published.append(iteration)
+        except Exception:  # a broken evaluation must not take the training down
+            log.exception("watch: the evaluation episode of iteration %d failed", iteration)
+        finally:
+            env.close()
+
+    def _send(self, env, decision: int, info: dict, slots: dict, done: bool) -> None:
+        state = env.game_state
+        common = {"match": self.run, "decision": decision, "scoreboard": env.rules.scoreboard(), "done": done}
+        self._state_pub.put(pack_with_raw({**common, "status": "finished" if done else "running", "info": info,
+                                           "slots": slots}, {"state": pack_value(encode_state(state))}))
+        if state.events:
+            self.session.put(self.keys.events(self.run), pack({**common, "events": state.events, "info": info}))
+
+    def close(self) -> None:
+        self._stop.set()
+        self.wait()
+        for declared in (self._state_pub, self._token):
+            try:
+                declared.undeclare()
+            except Exception:
+                pass
+        self.session.close()
+
+
+def broadcast_from_train_config(cfg: dict, run_dir: str | Path) -> TrainingBroadcast | None:
+    """The trainer's broadcast for a validated training config (``watch_every`` 0: none)."""
+    if not cfg.get("watch_every"):
+        return None
+    run_dir = Path(run_dir)
+    run = "".join(c if c.isalnum() or c in "_-" else "-" for c in run_dir.resolve().name)[:64] or "run"
+    return TrainingBroadcast(cfg["env"], run, cfg["watch_every"], env_overrides=cfg["env_overrides"],
+                             server=cfg.get("watch_server", "local"),
+                             connect=tuple(cfg.get("watch_connect") or (DEFAULT_ENDPOINT,)),
+                             replay_dir=run_dir / "watch", seed=cfg["seed"] + 20_000)
