@@ -269,6 +269,10 @@ function rate(times) {
 window.__view = {
   ready: false,
   ballPosition: () => (shown ? [...shown.b] : null),
+  // each car's position, null for a car not drawn (absent or demolished)
+  carPositions: () => (shown ? shown.a.map((c) => (c && !(c[8] & FLAG_DEMOED) ? c.slice(0, 3) : null)) : null),
+  project: (point) => view.project(point),
+  camera: () => view.cameraMode,
   score: () => (shown ? [...shown.s] : null),
   hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],
   tick: () => timeline.playhead,

@@ -249,6 +249,12 @@ export class View {
     });
   }
 
+  // Where a point (uu) is on the canvas, in CSS pixels from its top left.
+  project([x, y, z]) {
+    const v = new THREE.Vector3(x, y, z).project(this.camera);
+    return [((v.x + 1) / 2) * this.canvas.clientWidth, ((1 - v.y) / 2) * this.canvas.clientHeight];
+  }
+
   setObstacles(list) {
     const key = JSON.stringify(list || []);
     if (key === this._obstacleKey) return;
@@ -268,7 +274,11 @@ export class View {
     let pos, target, up = new THREE.Vector3(0, 0, 1);
     const chased = this.cameraMode === "chase" && this.cars[this.chaseIndex];
     if (this.cameraMode === "top") {
-      pos = new THREE.Vector3(0, 0, 12500);
+      // high enough to fit the field and both goals, the field's length across the screen
+      const halfLength = this.arena ? this.arena.field.extent_y + this.arena.goal.depth : 6000;
+      const halfWidth = this.arena ? this.arena.field.extent_x + 200 : 4300;
+      const tanV = Math.tan(THREE.MathUtils.degToRad(cam.fov / 2)), tanH = tanV * cam.aspect;
+      pos = new THREE.Vector3(0, 0, Math.max(halfLength / tanH, halfWidth / tanV) + 200);
       target = new THREE.Vector3(0, 0, 0);
       up = new THREE.Vector3(-1, 0, 0); // the field's length across the screen, blue's goal on the left
     } else if (chased && chased.car.visible) {

@@ -1,0 +1,131 @@
+"""The page in a real headless Chromium (Debian's, WebGL through SwiftShader), one browser for the module:
+a live match from a real `rocketdrl-ma serve` whose HUD score equals the server's scoreboard after a goal,
+a replay that seeks and steps to the states the file holds, and both team colours on the cars."""
+from __future__ import annotations
+
+import io
+import time
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from rocketdrl_ma.env.replay import load_replay
+from rocketdrl_ma.server.bot import LobbyClient, local_client_settings
+from web_helpers import Procs, launch_chromium, wait_for, write_replay
+
+pytestmark = pytest.mark.slow
+VIEWPORT = {"width": 1280, "height": 720}
+#: 2v2 ball-chasers, seed 0: blue scores after about 6.5 s of game, nobody after; the clock ends at 8 s
+GOAL_MATCH = {"config": "matches/2v2.yaml", "seed": 0, "mode": "realtime", "ready_timeout_s": 3.0,
+              "overrides": {"clock_s": 8.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 2.0}}
+
+
+@pytest.fixture(scope="module")
+def stack(tmp_path_factory):
+    """A match server, a replay, a page server following both, and one Chromium."""
+    from playwright.sync_api import sync_playwright
+
+    tmp = tmp_path_factory.mktemp("page")
+    replay = write_replay(tmp / "replays" / "chasers.npz", "matches/2v2.yaml", decisions=90)
+    procs = Procs()
+    try:
+        _, endpoint = procs.serve(tmp)
+        _, url = procs.web("--connect", endpoint, "--server", "web", "--replays", str(tmp / "replays"))
+        session = local_client_settings([endpoint]).open()
+        with sync_playwright() as playwright:
+            browser = launch_chromium(playwright)
+            yield {"url": url, "lobby": LobbyClient(session, "web"), "browser": browser, "replay": replay}
+            browser.close()
+        session.close()
+    finally:
+        procs.stop_all()
+
+
+def open_page(stack, fragment: str):
+    """A page at ``url#fragment`` whose console errors and page errors are collected."""
+    page = stack["browser"].new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(stack["url"] + fragment)
+    page.wait_for_function("window.__view && window.__view.ready", timeout=30_000)
+    return page, errors
+
+
+def test_webgl_works_in_this_chromium(stack):
+    page = stack["browser"].new_page()
+    version = page.evaluate("document.createElement('canvas').getContext('webgl2') !== null")
+    page.close()
+    assert version, "no WebGL 2 in headless chromium"
+
+
+def test_live_match_hud_score_equals_the_server_scoreboard_after_a_goal(stack):
+    lobby = stack["lobby"]
+    lobby.create(GOAL_MATCH["config"], "goal", **{k: v for k, v in GOAL_MATCH.items() if k != "config"})
+    page, errors = open_page(stack, "#match=goal")
+    page.wait_for_function("window.__view.roster() !== null", timeout=30_000)
+    info = wait_for(lambda: (lambda i: i if i["status"] == "finished" else None)(lobby.inspect("goal")), 60.0,
+                    "the match to finish", interval_s=0.2)
+    board = info["scoreboard"]["score"]
+    expected = [board["blue"], board["orange"]]
+    assert sum(expected) >= 1, f"the set-up should have a goal: {info['scoreboard']}"
+    page.wait_for_function(f"JSON.stringify(window.__view.hudScore()) === '{expected}'.replace(/ /g, '')",
+                           timeout=15_000)
+    assert page.evaluate("window.__view.hudScore()") == expected == page.evaluate("window.__view.score()")
+    feed = page.inner_text("#feed")
+    scorers = [agent for agent, stats in info["summary"]["stats"].items() if stats.get("goals")]
+    assert "GOAL blue" in feed and any(agent in feed for agent in scorers), feed
+    assert page.inner_text("#title").endswith("finished")
+    stats = page.evaluate("window.__view.stats()")
+    print(f"\nlive 2v2 in headless chromium (SwiftShader): {stats['fps']:.1f} fps, states received "
+          f"{stats['frames']}, largest {stats['bytesMax']} bytes, page loop {stats['loopMs']:.2f} ms/frame")
+    page.close()
+    assert errors == []
+
+
+def test_replay_seeks_and_steps_to_the_replays_states_and_shows_both_team_colours(stack):
+    replay = load_replay(stack["replay"])
+    page, errors = open_page(stack, "#replay=replays/chasers.npz")
+    page.wait_for_function("window.__view.mode() === 'replay' && window.__view.roster() !== null", timeout=30_000)
+    assert not page.is_hidden("#timeline")
+    page.click("#play")  # pause
+    i = 40
+    tick = int(replay.ticks[i])
+    page.eval_on_selector("#seek", "(el, tick) => { el.value = tick; el.dispatchEvent(new Event('input')); }", tick)
+    page.wait_for_function(f"window.__view.tick() === {tick}")
+    assert page.evaluate("window.__view.frameIndex()") == i
+    ball = np.array(page.evaluate("window.__view.ballPosition()"))
+    assert np.allclose(ball, replay.state(i).ball.pos, atol=0.05), (ball, replay.state(i).ball.pos)
+    page.click("#step-forward")
+    page.wait_for_function(f"window.__view.frameIndex() === {i + 1}")
+    assert np.allclose(page.evaluate("window.__view.ballPosition()"), replay.state(i + 1).ball.pos, atol=0.05)
+    page.keyboard.press("ArrowLeft")
+    page.keyboard.press("ArrowLeft")
+    page.wait_for_function(f"window.__view.frameIndex() === {i - 1}")
+    assert np.allclose(page.evaluate("window.__view.ballPosition()"), replay.state(i - 1).ball.pos, atol=0.05)
+    page.select_option("#speed", "4")
+    page.click("#play")
+    page.wait_for_function(f"window.__view.frameIndex() > {i + 5}", timeout=20_000)
+    page.click("#play")
+
+    # Both team colours, on the cars themselves: the top-down view with the HUD hidden, pixels around each car.
+    page.keyboard.press("2")
+    page.keyboard.press("h")
+    time.sleep(0.5)  # a few frames at the new camera
+    cars = page.evaluate("window.__view.carPositions()")
+    teams = page.evaluate("window.__view.roster().teams")
+    spots = [page.evaluate("(p) => window.__view.project(p)", car) for car in cars if car is not None]
+    teams = [team for car, team in zip(cars, teams) if car is not None]
+    assert set(teams) == {0, 1}
+    shot = page.locator("#view").screenshot(path=str(stack["replay"].with_name("topdown.png")))
+    pixels = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB")).astype(int)
+    r, g, b = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+    team_masks = [(b > 150) & (b > r + 60) & (b > g + 20), (r > 170) & (r > g + 50) & (g > 60) & (b < 110)]
+    assert all(mask.sum() > 0 for mask in team_masks)
+    for (x, y), team in zip(spots, teams):
+        x, y = int(round(x)), int(round(y))
+        window = team_masks[team][max(0, y - 10):y + 11, max(0, x - 10):x + 11]
+        assert window.sum() >= 4, f"car of team {team} at pixel {(x, y)}: {window.sum()} pixels of its colour"
+    page.close()
+    assert errors == []

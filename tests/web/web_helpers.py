@@ -1,0 +1,152 @@
+"""Helpers of the page tests: `rocketdrl-ma serve` and `rocketdrl-ma web` subprocesses on free loopback
+ports (stopped by their PID), a websocket client of the page server, Debian's chromium through Playwright,
+and short replays written by the env itself."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import msgpack
+
+REPO = Path(__file__).resolve().parents[2]
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--no-first-run"]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for(predicate, timeout_s: float = 30.0, what: str = "condition", interval_s: float = 0.05):
+    end = time.monotonic() + timeout_s
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > end:
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+        time.sleep(interval_s)
+
+
+def cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "rocketdrl_ma.cli", *args]
+
+
+class Proc:
+    """A subprocess whose output lines a reader thread collects."""
+
+    def __init__(self, argv: list[str], cwd: Path = REPO):
+        self.popen = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                      env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        self.pid = self.popen.pid
+        self.lines: list[str] = []
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        for line in self.popen.stdout:
+            self.lines.append(line.rstrip("\n"))
+
+    def line(self, startswith: str, timeout_s: float = 60.0) -> str:
+        def found():
+            if self.popen.poll() is not None and not self._reader.is_alive():
+                raise AssertionError(f"{self.popen.args} exited:\n" + "\n".join(self.lines))
+            return next((line for line in list(self.lines) if line.startswith(startswith)), None)
+        return wait_for(found, timeout_s, f"a line starting with {startswith!r}")
+
+    def stop(self) -> None:
+        if self.popen.poll() is None:
+            os.kill(self.pid, 15)
+            try:
+                self.popen.wait(10)
+            except subprocess.TimeoutExpired:
+                os.kill(self.pid, 9)
+                self.popen.wait(10)
+
+
+class Procs:
+    """Subprocesses of a test module; every one still running is stopped at teardown."""
+
+    def __init__(self):
+        self.procs: list[Proc] = []
+
+    def start(self, argv: list[str]) -> Proc:
+        p = Proc(argv)
+        self.procs.append(p)
+        return p
+
+    def serve(self, tmp_path: Path, name: str = "web") -> tuple[Proc, str]:
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        p = self.start(cli("serve", "server/local.yaml", "--listen", endpoint, "--name", name, "--results",
+                           str(tmp_path / "results.sqlite")))
+        p.line("serving", 60.0)
+        return p, endpoint
+
+    def web(self, *args: str) -> tuple[Proc, str]:
+        p = self.start(cli("web", "--port", "0", *args))
+        line = p.line("page at ", 60.0)
+        return p, line.split()[2]
+
+    def stop_all(self) -> None:
+        for p in reversed(self.procs):
+            p.stop()
+
+
+class PageSocket:
+    """A websocket client of the page server, speaking the page's protocol (JSON in, msgpack out)."""
+
+    def __init__(self, url: str, **kwargs):
+        from websockets.sync.client import connect
+        self._connection = connect(url.replace("http://", "ws://") + "ws", **kwargs)
+        self.ws = self._connection.__enter__()
+
+    def send(self, **request) -> None:
+        self.ws.send(json.dumps(request))
+
+    def recv(self, timeout_s: float = 10.0) -> dict:
+        return msgpack.unpackb(self.ws.recv(timeout=timeout_s), raw=False)
+
+    def recv_type(self, kind: str, timeout_s: float = 30.0) -> dict:
+        end = time.monotonic() + timeout_s
+        while True:
+            message = self.recv(max(0.01, end - time.monotonic()))
+            if message["type"] == kind:
+                return message
+
+    def close(self) -> None:
+        self._connection.__exit__(None, None, None)
+
+
+def launch_chromium(playwright):
+    """Debian's chromium (the Makefile installs it); WebGL through SwiftShader when there is no GPU."""
+    executable = shutil.which("chromium")
+    if executable is None:
+        raise AssertionError("chromium is not installed: `make test` installs Debian's chromium (apt-get install "
+                             "chromium)")
+    return playwright.chromium.launch(executable_path=executable, headless=True, args=CHROMIUM_ARGS)
+
+
+def write_replay(path: Path, config: str = "matches/2v2.yaml", decisions: int = 90, seed: int = 0) -> Path:
+    """A short replay of scripted ball-chasers, recorded by ``env.start_replay``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    import rocketdrl_ma
+    from rocketdrl_ma.policies.scripted import make_scripted
+
+    env = rocketdrl_ma.parallel_env(config, kickoff_countdown_s=0.0, max_cycles=decisions)
+    env.reset(seed=seed)
+    env.start_replay(path)
+    bots = {agent: make_scripted("ball_chaser") for agent in env.possible_agents}
+    while env.agents:
+        state = env.game_state
+        env.step({agent: env.action_parser.encode(bots[agent].act(agent, state)) for agent in env.agents})
+    env.close()
+    return path
