@@ -16,7 +16,11 @@ def _run_train(args: argparse.Namespace) -> int:
     name = Path(args.config).stem
     run_dir = Path(args.run_dir or Path("runs") / name)
     out = Path(args.out or run_dir / "final.pt")
-    result = train(cfg, out=out, run_dir=run_dir, resume=args.resume, progress=not args.quiet)
+    watch = None
+    if cfg["watch_every"]:  # evaluation episodes for `rocketdrl-ma web`, published on Zenoh
+        from rocketdrl_ma.web.training import broadcast_from_train_config
+        watch = broadcast_from_train_config(cfg, run_dir)
+    result = train(cfg, out=out, run_dir=run_dir, resume=args.resume, progress=not args.quiet, watch=watch)
     for steps, success, ret, episodes in result.history:
         print(f"steps {steps:>10,d}  success {success:6.1%}  return {ret:+8.2f}  episodes {episodes}")
     print(f"checkpoint: {result.checkpoint} ({result.agent_steps:,d} agent steps); TensorBoard logs: {run_dir}")

@@ -1,5 +1,5 @@
-"""Watch a policy while it trains: every ``watch_every`` iterations the trainer hands the current policy to
-``TrainingBroadcast``, which plays one evaluation episode with it in a thread of its own and publishes it
+"""Watch a policy while it trains: every ``watch_every`` iterations the trainer hands the current policy (a
+frozen copy: ``policies/ppo/checkpoint.ModelPolicy``) to ``TrainingBroadcast``, which plays one evaluation episode with it in a thread of its own and publishes it
 at real-time pace on Zenoh, where the page (``rocketdrl-ma web``) lists the run next to the live matches.
 
 Keys (``<server>`` as for the match server, ``<run>`` the run's name)::
@@ -15,16 +15,12 @@ episode is also kept as a replay (``<replay_dir>/iter_<N>.npz``) the page can op
 """
 from __future__ import annotations
 
-import copy
 import logging
 import threading
 import time
 from pathlib import Path
-from typing import Any
 
-import numpy as np
-
-from rocketdrl_ma.policies.registry import ObservingPolicy, Policy
+from rocketdrl_ma.policies.registry import Policy
 from rocketdrl_ma.server.protocol import check_name, encode_state, pack, pack_value, pack_with_raw
 from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
 
@@ -52,25 +48,6 @@ class TrainingKeys:
         if key.startswith(prefix) and key.endswith(suffix) and "/" not in key[len(prefix):-len(suffix)]:
             return key[len(prefix):-len(suffix)]
         return None
-
-
-class ModelPolicy(ObservingPolicy):
-    """A frozen copy of a PPO model (anything with ``act_deterministic`` and ``action``) playing greedily
-    through the observation builder and action parser of the env config it trains on."""
-
-    def __init__(self, model: Any, env_config: dict):
-        from rocketdrl_ma.env.actions import make_action_parser
-        from rocketdrl_ma.env.observations import make_obs_builder
-
-        obs_spec, act_spec = dict(env_config["observation"]), dict(env_config["action"])
-        super().__init__(make_obs_builder(obs_spec.pop("name"), **obs_spec),
-                         make_action_parser(act_spec.pop("name"), **act_spec))
-        self.model = copy.deepcopy(model).eval()  # the trainer goes on changing its own weights meanwhile
-        self.name = "training policy"
-
-    def act(self, obs: np.ndarray) -> np.ndarray | int:
-        action = self.model.act_deterministic(obs[None])[0]
-        return int(action) if self.model.action["kind"] == "discrete" else action
 
 
 class TrainingBroadcast:

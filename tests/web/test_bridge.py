@@ -134,3 +134,33 @@ def test_a_training_run_publishes_an_episode_the_page_lists_and_shows(stack, tmp
     finally:
         page.close()
         broadcast.close()
+
+
+def test_training_with_watch_every_shows_the_current_policy_on_the_page(stack, tmp_path):
+    from rocketdrl_ma.policies.ppo import train, validate_train_config
+    from rocketdrl_ma.web.training import broadcast_from_train_config
+
+    cfg = validate_train_config({
+        "env": "matches/1v1.yaml", "n_envs": 2, "buffer_size": 256, "batch_size": 128, "num_epoch": 1,
+        "hidden_units": 16, "max_steps": 1536, "summary_freq": 1024, "checkpoint_interval": 100_000,
+        "env_overrides": {"kickoff_countdown_s": 0.0, "clock_s": 3.0, "overtime_limit_s": 1.0},
+        "watch_every": 2, "watch_server": "web", "watch_connect": [stack["endpoint"]]})
+    run_dir = tmp_path / "watched-run"
+    watch = broadcast_from_train_config(cfg, run_dir)
+    page = PageSocket(stack["url"])
+    try:
+        def listed():
+            page.send(op="list")
+            return "watched-run" in [r["id"] for r in page.recv_type("list")["training"]]
+        wait_for(listed, 20.0, "the training run in the page's list", interval_s=0.2)
+        page.send(op="watch", kind="train", id="watched-run")
+        page.recv_type("watching")
+        time.sleep(0.5)
+        result = train(cfg, out=tmp_path / "final.pt", run_dir=run_dir, progress=False, watch=watch)
+        assert result.agent_steps == 1536  # 6 iterations of 256 agent steps
+        status = page.recv_type("status", 30.0)
+        assert status["info"]["run"] == "watched-run" and status["info"]["iteration"] in (2, 4, 6)
+        assert page.recv_type("frame", 30.0)["a"][0] is not None
+    finally:
+        page.close()
+    assert (run_dir / "watch" / "iter_000002.npz").is_file()

@@ -8,6 +8,7 @@ No pickled code anywhere: every file loads with ``torch.load(weights_only=True)`
 """
 from __future__ import annotations
 
+import copy
 import json
 from pathlib import Path
 from typing import Any
@@ -75,20 +76,28 @@ def load_model(path: str | Path) -> tuple[PPOModel, dict[str, Any]]:
     return model, meta
 
 
-class CheckpointPolicy(ObservingPolicy):
-    """A trained PPO policy playing greedily through the observation builder and action parser it learned with."""
+class ModelPolicy(ObservingPolicy):
+    """A PPO model playing greedily through the observation builder and action parser of the resolved env
+    config it learns on (the trainer hands a frozen copy of its model to ``watch_every``'s episodes)."""
 
-    def __init__(self, path: str | Path):
-        self.model, self.meta = load_model(path)
-        env_cfg = self.meta["env"]["resolved"]
-        obs_spec, act_spec = dict(env_cfg["observation"]), dict(env_cfg["action"])
+    def __init__(self, model: PPOModel, env_config: dict[str, Any], name: str = "training policy"):
+        obs_spec, act_spec = dict(env_config["observation"]), dict(env_config["action"])
         super().__init__(make_obs_builder(obs_spec.pop("name"), **obs_spec),
                          make_action_parser(act_spec.pop("name"), **act_spec))
-        self.name = f"checkpoint:{path}"
+        self.model = copy.deepcopy(model).eval()  # a trainer goes on changing its own weights
+        self.name = name
 
     def act(self, obs: np.ndarray) -> np.ndarray | int:
         action = self.model.act_deterministic(obs[None])[0]
         return int(action) if self.model.action["kind"] == "discrete" else action
+
+
+class CheckpointPolicy(ModelPolicy):
+    """A trained PPO policy playing greedily through the observation builder and action parser it learned with."""
+
+    def __init__(self, path: str | Path):
+        model, self.meta = load_model(path)
+        super().__init__(model, self.meta["env"]["resolved"], f"checkpoint:{path}")
 
 
 def load_checkpoint_policy(path: str) -> CheckpointPolicy:

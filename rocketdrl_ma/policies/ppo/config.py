@@ -24,6 +24,9 @@ difficulty by ``step`` up to 1; empty: train at the env config's difficulty thro
 ``selfplay``: train one team against an opponent pool (``policies/selfplay/config.py``); empty: none.
 ``features``: fixed inputs the model computes from the observation (``features.py``): ``none``, or
 ``car_local`` (ball and other cars in the car's own frame; needs the ``team_relative`` observation).
+``watch_every``: every that many iterations, play one greedy evaluation episode of the current policy and
+publish it for ``rocketdrl-ma web`` (``rocketdrl_ma/web/training.py``) to the match server ``watch_server``
+reached at ``watch_connect``; 0: never.
 """
 from __future__ import annotations
 
@@ -69,6 +72,9 @@ TRAIN_DEFAULTS: dict[str, Any] = {
     "features": "none",
     "curriculum": {},
     "selfplay": {},
+    "watch_every": 0,
+    "watch_server": "local",
+    "watch_connect": ["tcp/127.0.0.1:7447"],
 }
 CURRICULUM_KEYS = {"start": 0.0, "step": 0.1, "threshold": 0.8}
 SCHEDULES = ("linear", "constant")
@@ -120,6 +126,13 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"features: {cfg['features']!r} is not one of {list(FEATURES)}")
     if not isinstance(cfg["normalize"], bool):
         raise ValueError(f"normalize: expected true or false, got {cfg['normalize']!r}")
+    _check_number("watch_every", cfg["watch_every"], int)
+    if cfg["watch_every"] < 0:
+        raise ValueError(f"watch_every: must be >= 0 (0: no evaluation episodes to watch), got {cfg['watch_every']}")
+    if not (isinstance(cfg["watch_connect"], list) and all(isinstance(e, str) for e in cfg["watch_connect"])):
+        raise ValueError(f"watch_connect: expected a list of Zenoh endpoints, got {cfg['watch_connect']!r}")
+    if not isinstance(cfg["watch_server"], str):
+        raise ValueError(f"watch_server: expected the match server's name, got {cfg['watch_server']!r}")
     if cfg["batch_size"] > cfg["buffer_size"]:
         raise ValueError(f"batch_size: must be <= buffer_size ({cfg['buffer_size']}), got {cfg['batch_size']}")
     cfg["shaping"] = check_shaping(cfg["shaping"])

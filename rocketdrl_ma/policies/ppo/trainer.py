@@ -29,7 +29,7 @@ from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.policies.selfplay.imitation import imitation_loss
 from rocketdrl_ma.policies.selfplay.kickstart import teacher_weight
 
-from .checkpoint import read_meta, resolve_checkpoint, save_checkpoint, sidecar
+from .checkpoint import ModelPolicy, read_meta, resolve_checkpoint, save_checkpoint, sidecar
 from .envs import EnvPool
 from .model import PPOModel, action_spec, env_actions
 
@@ -88,8 +88,11 @@ def make_pool(cfg: dict[str, Any], run_dir: Path):
 
 
 def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str | Path | None = None,
-          progress: bool = True) -> TrainResult:
-    """Train until ``cfg["max_steps"]`` agent steps; write the final checkpoint to ``out``."""
+          progress: bool = True, watch=None) -> TrainResult:
+    """Train until ``cfg["max_steps"]`` agent steps; write the final checkpoint to ``out``.
+
+    ``watch`` (e.g. ``rocketdrl_ma.web.training.TrainingBroadcast``) gets the playing policy after every
+    iteration it says is ``due``: ``watch.publish(iteration, policy)``; the trainer closes it at the end."""
     torch.set_num_threads(1)  # small networks: one thread is fastest and fair to the other jobs on the box
     torch.manual_seed(cfg["seed"])
     device = pick_device(cfg["device"])
@@ -134,6 +137,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     # clone's weights under the drifted statistics lost what PPO's weights under the clone's kept: keep them.
     frozen_norm = bool(cfg["selfplay"] and cfg["selfplay"]["imitate"])
     obs = pool.reset()
+    iteration, env_config = 0, load_config(cfg["env"], cfg["env_overrides"])
     bar = tqdm(total=cfg["max_steps"], initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps = time.monotonic(), agent_steps
     stop = StopRequest()
@@ -212,6 +216,9 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
                                                    else np.mean((greedy - labels) ** 2))
         if hasattr(pool, "on_update"):
             pool.on_update(model, agent_steps, writer)
+        iteration += 1
+        if watch is not None and watch.due(iteration):
+            watch.publish(iteration, ModelPolicy(model, env_config))
 
         # ---- progress, summaries, checkpoints
         elapsed = time.monotonic() - start_time
@@ -239,6 +246,8 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     stop.restore()
     bar.close()
     pool.close()
+    if watch is not None:
+        watch.close()
     if writer is not None:
         writer.close()
     success, ret = _episode_stats(recent)
