@@ -255,8 +255,9 @@ class PageServer:
                     events = []
                     if kind == "match":
                         return
-                # after a frame, a whole period; with nothing new, look again soon
-                await asyncio.sleep(period if live is not None else period / 4)
+                # the next frame a whole period after this one; with nothing new, look again soon
+                wait = period - (time.monotonic() - last_sent) if live is not None else period / 4
+                await asyncio.sleep(max(0.0, wait))
         except asyncio.CancelledError:
             raise
         except Exception as e:  # a closed websocket, or a bug: the follower must go either way

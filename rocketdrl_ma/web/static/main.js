@@ -241,6 +241,10 @@ window.addEventListener("keydown", (e) => {
 });
 
 setInterval(() => send({ op: "list" }), 3000);
+window.addEventListener("hashchange", () => {
+  const wanted = location.hash, current = source ? `#${source.kind}=${encodeURIComponent(source.id)}` : "";
+  if (wanted !== current) openFromHash();
+});
 
 // ------------------------------------------------------------------------------------------- loop
 let last = performance.now() / 1000, shown = null;

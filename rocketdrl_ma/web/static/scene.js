@@ -286,7 +286,7 @@ export class View {
       const away = new THREE.Vector3(car.x - ball.x, car.y - ball.y, 0);
       if (away.lengthSq() < 1) away.set(-1, 0, 0);
       away.normalize();
-      pos = new THREE.Vector3(car.x + away.x * 520, car.y + away.y * 520, car.z + 230);
+      pos = new THREE.Vector3(car.x + away.x * 750, car.y + away.y * 750, car.z + 320);
       target = new THREE.Vector3().copy(ball).lerp(car, 0.25);
     } else {
       // beside the field (+x, so blue's goal is on the left), level with the ball along its length
