@@ -203,7 +203,7 @@ class PageServer:
                         feed = await self._get_feed()
                         if feed is None:
                             raise ValueError(f"zenoh: no match server reachable ({self._feed_error})")
-                        follower = feed.follow(kind, source_id)
+                        follower = await asyncio.to_thread(feed.follow, kind, source_id)
                         follow = asyncio.create_task(self._pump(ws, follower, kind, source_id))
                     elif op == "replay":
                         reply = await asyncio.to_thread(self.library.open, request.get("id"))

@@ -134,10 +134,15 @@ class SpectatorFeed:
         return sorted(runs, key=lambda r: r["id"])
 
     def follow(self, kind: str, source_id: Any) -> Follower:
-        """Follow a match (``kind="match"``) or a training run's evaluation episodes (``"train"``)."""
+        """Follow a match (``kind="match"``, which must exist) or a training run's evaluation episodes
+        (``"train"``, which may start publishing later). Blocks for the lobby's answer."""
         if kind not in SOURCE_KINDS:
             raise ValueError(f"kind: {kind!r} is not one of {list(SOURCE_KINDS)}")
         source_id = check_name("id", source_id)
         if kind == "match":
+            try:  # a match the server does not know is an error now, not a page that waits forever
+                LobbyClient(self.session, self.server, self.lobby_timeout_s).inspect(source_id)
+            except (ServerGone, ServerError) as e:
+                raise ValueError(str(e)) from None
             return Follower(self.session, self.keys.state(source_id), self.keys.events(source_id))
         return Follower(self.session, self.training_keys.state(source_id), self.training_keys.events(source_id))

@@ -81,6 +81,8 @@ def test_the_page_is_read_only_and_refuses_other_origins_and_hosts(stack):
         assert "read-only" in reply["error"]
     page.send(op="watch", kind="match", id="../../secret")
     assert "id:" in page.recv_type("error")["error"]
+    page.send(op="watch", kind="match", id="nosuchmatch")
+    assert "no match 'nosuchmatch'" in page.recv_type("error")["error"]
     page.send(op="replay", id="/etc/passwd")
     assert "not one of the replays" in page.recv_type("error")["error"]
     page.close()

@@ -8,6 +8,7 @@ const $ = (id) => document.getElementById(id);
 const view = new View($("view"));
 const timeline = new Timeline();
 const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
+let boostPanels = [];
 let socket = null, roster = null, source = null, lastList = null, status = null, hudHidden = false;
 
 // ------------------------------------------------------------------------------------------- websocket
@@ -141,6 +142,8 @@ function setRoster(r) {
       return div;
     }).filter(Boolean));
   }
+  boostPanels = [...document.querySelectorAll(".car-boost")];
+  written.clear();
   const cams = [["broadcast", "Broadcast"], ["top", "Top-down"], ...r.agents.map((a, i) => [`chase:${i}`, `Chase ${a}`])];
   $("cameras").replaceChildren(...cams.map(([mode, label]) => {
     const b = document.createElement("button");
@@ -192,20 +195,26 @@ function describe(e) {
   }
 }
 
+// Set a text or style only when it changes: the HUD is redrawn every frame, the DOM should not be.
+const written = new Map();
+function write(el, key, value, apply) {
+  const id = `${el.id || el.dataset.index}:${key}`;
+  if (written.get(id) !== value) { written.set(id, value); apply(value); }
+}
+
 let shownFeed = "";
 function updateHud(s) {
   if (!s) return;
-  $("score-blue").textContent = s.s[0];
-  $("score-orange").textContent = s.s[1];
-  $("clock").textContent = clock(s.c, s.o);
-  $("overtime").hidden = !s.o;
-  document.querySelectorAll(".car-boost").forEach((div) => {
+  write($("score-blue"), "text", s.s[0], (v) => { $("score-blue").textContent = v; });
+  write($("score-orange"), "text", s.s[1], (v) => { $("score-orange").textContent = v; });
+  write($("clock"), "text", clock(s.c, s.o), (v) => { $("clock").textContent = v; });
+  write($("overtime"), "hidden", !s.o, (v) => { $("overtime").hidden = v; });
+  for (const div of boostPanels) {
     const car = s.a[Number(div.dataset.index)];
-    const boost = car ? Math.round(car[7]) : 0;
-    div.querySelector(".amount").textContent = car ? boost : "–";
-    div.querySelector(".fill").style.width = `${car ? car[7] : 0}%`;
-    div.classList.toggle("demoed", !!car && (car[8] & FLAG_DEMOED) !== 0);
-  });
+    write(div, "amount", car ? String(Math.round(car[7])) : "–", (v) => { div.querySelector(".amount").textContent = v; });
+    write(div, "fill", car ? Math.round(car[7]) : 0, (v) => { div.querySelector(".fill").style.width = `${v}%`; });
+    write(div, "demoed", !!car && (car[8] & FLAG_DEMOED) !== 0, (v) => div.classList.toggle("demoed", v));
+  }
   const events = timeline.shownEvents(8);
   const key = events.map((e) => `${e.kind}${e.tick}${e.agent || e.scorer || ""}`).join("|");
   if (key !== shownFeed) {
@@ -219,7 +228,7 @@ function updateHud(s) {
     }));
   }
   if (!timeline.live && timeline.frames.length) {
-    $("seek").value = Math.round(timeline.playhead);
+    write($("seek"), "value", Math.round(timeline.playhead), (v) => { $("seek").value = v; });
     const t0 = timeline.firstTick, rate = timeline.tickRate;
     $("time").textContent = `${clock((timeline.playhead - t0) / rate, true).replace("+", "")} / ` +
       `${clock((timeline.lastTick - t0) / rate, true).replace("+", "")}`;

@@ -27,19 +27,30 @@ function slerp(qa, qb, t) {
 
 function far(a, b) { return Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]) > TELEPORT_UU; }
 
-// The state at `tick` between the frames around it (the earlier frame's discrete fields).
-export function sample(frames, tick) {
+// The frames around `tick` and how far between them it is: [a, b, t], or null with no frames.
+function around(frames, tick) {
   if (!frames.length) return null;
   let lo = 0, hi = frames.length - 1;
-  if (tick <= frames[0].t) return { ...frames[0], alpha: 0 };
-  if (tick >= frames[hi].t) return { ...frames[hi], alpha: 0 };
+  if (tick <= frames[0].t) return [frames[0], frames[0], 0];
+  if (tick >= frames[hi].t) return [frames[hi], frames[hi], 0];
   while (hi - lo > 1) {
     const mid = (lo + hi) >> 1;
     if (frames[mid].t <= tick) lo = mid; else hi = mid;
   }
-  const a = frames[lo], b = frames[hi];
-  const t = (tick - a.t) / (b.t - a.t);
-  const ball = far(a.b, b.b) ? (t < 0.5 ? a.b : b.b) : a.b.map((v, i) => lerp(v, b.b[i], t));
+  return [frames[lo], frames[hi], (tick - frames[lo].t) / (frames[hi].t - frames[lo].t)];
+}
+
+function ballAt(a, b, t) {
+  return far(a.b, b.b) ? (t < 0.5 ? a.b : b.b) : a.b.map((v, i) => lerp(v, b.b[i], t));
+}
+
+// The state at `tick` between the frames around it (the earlier frame's discrete fields).
+export function sample(frames, tick) {
+  const found = around(frames, tick);
+  if (!found) return null;
+  const [a, b, t] = found;
+  if (a === b) return { ...a, alpha: 0 };
+  const ball = ballAt(a, b, t);
   const cars = a.a.map((ca, i) => {
     const cb = b.a[i];
     if (!ca || !cb) return t < 0.5 ? ca : cb;
@@ -151,7 +162,8 @@ export class Timeline {
     for (let i = 0; i < points; i++) {
       const tick = this.playhead - i * step;
       if (tick < this.firstTick) break;
-      const p = sample(this.frames, tick).b;
+      const [a, b, t] = around(this.frames, tick);
+      const p = ballAt(a, b, t);
       if (out.length && far(out[out.length - 1], p)) break;
       out.push(p);
     }
