@@ -233,8 +233,11 @@ class PageServer:
                 update: FeedUpdate = follower.poll()
                 events += update.events
                 live = update.state
+                try:
+                    cast = roster(live.state, live.names) if live is not None else None
+                except ValueError:  # a state no match has (e.g. a car that is no blue_N/orange_N): dropped
+                    live = None
                 if live is not None:
-                    cast = roster(live.state, live.names)
                     if cast["agents"] != agents:
                         agents = cast["agents"]
                         await ws.send(pack_message(cast))

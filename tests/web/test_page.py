@@ -104,6 +104,17 @@ def test_replay_seeks_and_steps_to_the_replays_states_and_shows_both_team_colour
     page.keyboard.press("ArrowLeft")
     page.wait_for_function(f"window.__view.frameIndex() === {i - 1}")
     assert np.allclose(page.evaluate("window.__view.ballPosition()"), replay.state(i - 1).ball.pos, atol=0.05)
+    # between two recorded states the view interpolates: halfway in ticks, halfway in space
+    a, b = replay.state(i + 1), replay.state(i + 2)
+    page.eval_on_selector("#seek", "(el, tick) => { el.value = tick; el.dispatchEvent(new Event('input')); }",
+                          (a.tick + b.tick) // 2)
+    page.wait_for_function(f"window.__view.tick() === {(a.tick + b.tick) // 2}")
+    assert np.allclose(page.evaluate("window.__view.ballPosition()"), (a.ball.pos + b.ball.pos) / 2, atol=0.05)
+    cars = page.evaluate("window.__view.carPositions()")
+    shown = [(agent, car) for agent, car in zip(page.evaluate("window.__view.roster().agents"), cars) if car]
+    assert len(shown) >= 2  # the demolished ones are not drawn
+    for agent, car in shown:
+        assert np.allclose(car, (a.cars[agent].pos + b.cars[agent].pos) / 2, atol=0.05)
     page.select_option("#speed", "4")
     page.click("#play")
     page.wait_for_function(f"window.__view.frameIndex() > {i + 5}", timeout=20_000)
