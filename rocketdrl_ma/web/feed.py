@@ -16,11 +16,12 @@ from rocketdrl_ma.rules.state import GameState
 from rocketdrl_ma.server.bot import LobbyClient, ServerError, ServerGone
 from rocketdrl_ma.server.protocol import Keys, ProtocolError, check_name, decode_state, unpack
 from rocketdrl_ma.server.settings import ZenohSettings
-from rocketdrl_ma.server.watch import MAX_STATE_BYTES
 
 from .training import TrainingKeys
 
 SOURCE_KINDS = ("match", "train")
+#: the largest state or events message decoded; anything bigger is dropped
+MAX_STATE_BYTES = 16 * 1024 * 1024
 
 
 @dataclass

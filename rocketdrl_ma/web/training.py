@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from rocketdrl_ma.policies.registry import Policy
-from rocketdrl_ma.server.protocol import check_name, encode_state, pack, pack_value, pack_with_raw
+from rocketdrl_ma.server.protocol import check_name, encode_state, pack
 from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
 
 log = logging.getLogger(__name__)
@@ -135,8 +135,8 @@ class TrainingBroadcast:
     def _send(self, env, decision: int, info: dict, slots: dict, done: bool) -> None:
         state = env.game_state
         common = {"match": self.run, "decision": decision, "scoreboard": env.rules.scoreboard(), "done": done}
-        self._state_pub.put(pack_with_raw({**common, "status": "finished" if done else "running", "info": info,
-                                           "slots": slots}, {"state": pack_value(encode_state(state))}))
+        self._state_pub.put(pack({**common, "status": "finished" if done else "running", "info": info,
+                                  "slots": slots, "state": encode_state(state)}))
         if state.events:
             self.session.put(self.keys.events(self.run), pack({**common, "events": state.events, "info": info}))
 

@@ -9,9 +9,8 @@ import urllib.request
 
 import pytest
 
-from rocketdrl_ma.server.bot import LobbyClient, local_client_settings
-from rocketdrl_ma.web.training import TrainingBroadcast
 from rocketdrl_ma.policies.registry import load_policy
+from rocketdrl_ma.web.training import TrainingBroadcast
 from web_helpers import PageSocket, Procs, cli, wait_for
 
 pytestmark = pytest.mark.slow
@@ -27,9 +26,7 @@ def stack(tmp_path_factory):
     try:
         _, endpoint = procs.serve(tmp)
         _, url = procs.web("--connect", endpoint, "--server", "web", "--replays", str(tmp))
-        session = local_client_settings([endpoint]).open()
-        yield {"endpoint": endpoint, "url": url, "lobby": LobbyClient(session, "web"), "tmp": tmp}
-        session.close()
+        yield {"endpoint": endpoint, "url": url, "procs": procs, "tmp": tmp}
     finally:
         procs.stop_all()
 
@@ -41,13 +38,11 @@ def _stats(url: str) -> dict:
 
 def test_a_fast_4v4_reaches_the_page_at_most_30_states_a_second_under_2kb(stack):
     # Lockstep with every slot filled by the server runs as fast as the CPU allows: far more than 30 states/s.
-    lobby = stack["lobby"]
-    lobby.create("matches/4v4.yaml", "fast", ready_timeout_s=3.0, seed=1,
-                 overrides={"clock_s": 20.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 1.0})
+    procs, endpoint = stack["procs"], stack["endpoint"]
+    procs.lobby(endpoint, "web", "create", "matches/4v4.yaml", "--id", "fast", "--ready-timeout", "3", "--seed", "1",
+                "--set", "clock_s=20", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=1")
     page = PageSocket(stack["url"])
-    page.send(op="list")
-    listed = page.recv_type("list")
-    assert "fast" in [m["id"] for m in listed["matches"]]
+    assert "fast" in page.matches()
     page.send(op="watch", kind="match", id="fast")
     cast = page.recv_type("roster")
     assert len(cast["agents"]) == 8
@@ -58,7 +53,7 @@ def test_a_fast_4v4_reaches_the_page_at_most_30_states_a_second_under_2kb(stack)
             frames.append(message)
         elif message["type"] == "final":
             final = message
-    info = lobby.inspect("fast")
+    info = procs.inspect(endpoint, "web", "fast")
     assert info["status"] == "finished" == final["status"]
     assert info["timing"]["decisions"] > 2 * len(frames)  # the server published far more than the page got
     stats = _stats(stack["url"])

@@ -11,14 +11,13 @@ import pytest
 from PIL import Image
 
 from rocketdrl_ma.env.replay import load_replay
-from rocketdrl_ma.server.bot import LobbyClient, local_client_settings
-from web_helpers import Procs, launch_chromium, wait_for, write_replay
+from web_helpers import PageSocket, Procs, launch_chromium, wait_for, write_replay
 
 pytestmark = pytest.mark.slow
 VIEWPORT = {"width": 1280, "height": 720}
 #: 2v2 ball-chasers, seed 0: blue scores after about 6.5 s of game, nobody after; the clock ends at 8 s
-GOAL_MATCH = {"config": "matches/2v2.yaml", "seed": 0, "mode": "realtime", "ready_timeout_s": 3.0,
-              "overrides": {"clock_s": 8.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 2.0}}
+GOAL_MATCH = ("create", "matches/2v2.yaml", "--id", "goal", "--seed", "0", "--mode", "realtime", "--ready-timeout", "3",
+              "--set", "clock_s=8", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=2")
 
 
 @pytest.fixture(scope="module")
@@ -32,12 +31,10 @@ def stack(tmp_path_factory):
     try:
         _, endpoint = procs.serve(tmp)
         _, url = procs.web("--connect", endpoint, "--server", "web", "--replays", str(tmp / "replays"))
-        session = local_client_settings([endpoint]).open()
         with sync_playwright() as playwright:
             browser = launch_chromium(playwright)
-            yield {"url": url, "lobby": LobbyClient(session, "web"), "browser": browser, "replay": replay}
+            yield {"url": url, "procs": procs, "endpoint": endpoint, "browser": browser, "replay": replay}
             browser.close()
-        session.close()
     finally:
         procs.stop_all()
 
@@ -61,19 +58,22 @@ def test_webgl_works_in_this_chromium(stack):
 
 
 def test_live_match_hud_score_equals_the_server_scoreboard_after_a_goal(stack):
-    lobby = stack["lobby"]
-    lobby.create(GOAL_MATCH["config"], "goal", **{k: v for k, v in GOAL_MATCH.items() if k != "config"})
+    procs, endpoint = stack["procs"], stack["endpoint"]
+    procs.lobby(endpoint, "web", *GOAL_MATCH)
     page, errors = open_page(stack, "#match=goal")
     page.wait_for_function("window.__view.roster() !== null", timeout=30_000)
-    info = wait_for(lambda: (lambda i: i if i["status"] == "finished" else None)(lobby.inspect("goal")), 60.0,
-                    "the match to finish", interval_s=0.2)
-    board = info["scoreboard"]["score"]
-    expected = [board["blue"], board["orange"]]
-    assert sum(expected) >= 1, f"the set-up should have a goal: {info['scoreboard']}"
+    lobby = PageSocket(stack["url"])  # the server's lobby list, through the page server
+    listed = wait_for(lambda: (lambda m: m if m["status"] == "finished" else None)(lobby.matches()["goal"]), 60.0,
+                      "the match to finish", interval_s=0.3)
+    lobby.close()
+    expected = [listed["score"]["blue"], listed["score"]["orange"]]
+    assert sum(expected) >= 1, f"the set-up should have a goal: {listed}"
     page.wait_for_function(f"JSON.stringify(window.__view.hudScore()) === '{expected}'.replace(/ /g, '')",
                            timeout=15_000)
     assert page.evaluate("window.__view.hudScore()") == expected == page.evaluate("window.__view.score()")
     feed = page.inner_text("#feed")
+    info = procs.inspect(endpoint, "web", "goal")
+    assert [info["scoreboard"]["score"]["blue"], info["scoreboard"]["score"]["orange"]] == expected
     scorers = [agent for agent, stats in info["summary"]["stats"].items() if stats.get("goals")]
     assert "GOAL blue" in feed and any(agent in feed for agent in scorers), feed
     assert page.inner_text("#title").endswith("finished")
@@ -90,10 +90,15 @@ def test_replay_seeks_and_steps_to_the_replays_states_and_shows_both_team_colour
     page.wait_for_function("window.__view.mode() === 'replay' && window.__view.roster() !== null", timeout=30_000)
     assert not page.is_hidden("#timeline")
     page.click("#play")  # pause
+
+    def seek(index_or_tick: int, is_tick: bool = False) -> None:
+        """Drag the timeline's slider (as a user does: it pauses) to a state, or a tick."""
+        tick = index_or_tick if is_tick else int(replay.ticks[index_or_tick])
+        page.eval_on_selector("#seek", "(el, t) => { el.value = t; el.dispatchEvent(new Event('input')); }", tick)
+        page.wait_for_function(f"window.__view.tick() === {tick}")
+
     i = 40
-    tick = int(replay.ticks[i])
-    page.eval_on_selector("#seek", "(el, tick) => { el.value = tick; el.dispatchEvent(new Event('input')); }", tick)
-    page.wait_for_function(f"window.__view.tick() === {tick}")
+    seek(i)
     assert page.evaluate("window.__view.frameIndex()") == i
     ball = np.array(page.evaluate("window.__view.ballPosition()"))
     assert np.allclose(ball, replay.state(i).ball.pos, atol=0.05), (ball, replay.state(i).ball.pos)
@@ -106,9 +111,7 @@ def test_replay_seeks_and_steps_to_the_replays_states_and_shows_both_team_colour
     assert np.allclose(page.evaluate("window.__view.ballPosition()"), replay.state(i - 1).ball.pos, atol=0.05)
     # between two recorded states the view interpolates: halfway in ticks, halfway in space
     a, b = replay.state(i + 1), replay.state(i + 2)
-    page.eval_on_selector("#seek", "(el, tick) => { el.value = tick; el.dispatchEvent(new Event('input')); }",
-                          (a.tick + b.tick) // 2)
-    page.wait_for_function(f"window.__view.tick() === {(a.tick + b.tick) // 2}")
+    seek((a.tick + b.tick) // 2, is_tick=True)
     assert np.allclose(page.evaluate("window.__view.ballPosition()"), (a.ball.pos + b.ball.pos) / 2, atol=0.05)
     cars = page.evaluate("window.__view.carPositions()")
     shown = [(agent, car) for agent, car in zip(page.evaluate("window.__view.roster().agents"), cars) if car]
@@ -118,9 +121,15 @@ def test_replay_seeks_and_steps_to_the_replays_states_and_shows_both_team_colour
     page.select_option("#speed", "4")
     page.click("#play")
     page.wait_for_function(f"window.__view.frameIndex() > {i + 5}", timeout=20_000)
-    page.click("#play")
+    seek(i)  # pauses there
 
-    # Both team colours, on the cars themselves: the top-down view with the HUD hidden, pixels around each car.
+    # Both team colours, on the cars themselves: the top-down view with the HUD hidden, pixels around each car,
+    # at a state where no car hides under the ball or another car.
+    def apart(state) -> bool:
+        points = [c.pos[:2] for c in state.cars.values() if not c.is_demoed] + [state.ball.pos[:2]]
+        return len(points) == len(state.cars) + 1 and min(
+            np.linalg.norm(p - q) for k, p in enumerate(points) for q in points[k + 1:]) > 400.0
+    seek(next(k for k in range(len(replay)) if apart(replay.state(k))))
     page.keyboard.press("2")
     page.keyboard.press("h")
     time.sleep(0.5)  # a few frames at the new camera

@@ -91,6 +91,17 @@ class Procs:
         p.line("serving", 60.0)
         return p, endpoint
 
+    def lobby(self, endpoint: str, server: str, *args: str) -> str:
+        """``rocketdrl-ma lobby ARGS`` against the server (the command line is the stable client); its output."""
+        done = subprocess.run(cli("lobby", *args, "--connect", endpoint, "--server", server), cwd=REPO,
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stdout + done.stderr
+        return done.stdout
+
+    def inspect(self, endpoint: str, server: str, match: str) -> dict:
+        out = self.lobby(endpoint, server, "inspect", match)
+        return json.loads(out[out.index("{"):])
+
     def web(self, *args: str) -> tuple[Proc, str]:
         p = self.start(cli("web", "--port", "0", *args))
         line = p.line("page at ", 60.0)
@@ -121,6 +132,11 @@ class PageSocket:
             message = self.recv(max(0.01, end - time.monotonic()))
             if message["type"] == kind:
                 return message
+
+    def matches(self) -> dict:
+        """The page's list of matches, by id (status, mode, config, score: the server's lobby list)."""
+        self.send(op="list")
+        return {m["id"]: m for m in self.recv_type("list")["matches"]}
 
     def close(self) -> None:
         self._connection.__exit__(None, None, None)
