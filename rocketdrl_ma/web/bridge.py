@@ -35,6 +35,7 @@ from .replays import ReplayLibrary
 log = logging.getLogger(__name__)
 STATIC_DIR = Path(__file__).parent / "static"
 MAX_STATES_PER_S = 30.0
+ENDED_STATUSES = ("finished", "stopped", "failed")
 MAX_REQUEST_BYTES = 64 * 1024
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                  ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
@@ -229,6 +230,11 @@ class PageServer:
         last_sent: float | None = None
         try:
             await ws.send(pack_message({"type": "watching", "kind": kind, "id": source_id}))
+            if follower.info.get("status") in ENDED_STATUSES:  # nothing more will be published: say how it ended
+                await ws.send(pack_message({"type": "final", "events": [], "info": {},
+                                            **{k: follower.info.get(k) for k in ("status", "summary", "result_key",
+                                                                                  "error")}}))
+                return
             while True:
                 update: FeedUpdate = follower.poll()
                 events += update.events

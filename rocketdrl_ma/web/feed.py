@@ -48,6 +48,7 @@ class Follower:
     """Follows one source's state and events keys until ``close``."""
 
     def __init__(self, session, state_key: str, events_key: str):
+        self.info: dict = {}  # a match's lobby ``inspect`` reply when it was followed
         self._lock = threading.Lock()
         self._latest: bytes | None = None
         self._events: list[bytes] = []
@@ -141,9 +142,12 @@ class SpectatorFeed:
             raise ValueError(f"kind: {kind!r} is not one of {list(SOURCE_KINDS)}")
         source_id = check_name("id", source_id)
         if kind == "match":
+            # subscribed first, then asked: a match that ends in between still shows its end
+            follower = Follower(self.session, self.keys.state(source_id), self.keys.events(source_id))
             try:  # a match the server does not know is an error now, not a page that waits forever
-                LobbyClient(self.session, self.server, self.lobby_timeout_s).inspect(source_id)
+                follower.info = LobbyClient(self.session, self.server, self.lobby_timeout_s).inspect(source_id)
             except (ServerGone, ServerError) as e:
+                follower.close()
                 raise ValueError(str(e)) from None
-            return Follower(self.session, self.keys.state(source_id), self.keys.events(source_id))
+            return follower
         return Follower(self.session, self.training_keys.state(source_id), self.training_keys.events(source_id))

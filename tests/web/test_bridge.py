@@ -65,6 +65,10 @@ def test_a_fast_4v4_reaches_the_page_at_most_30_states_a_second_under_2kb(stack)
     last = frames[-1]
     board = info["scoreboard"]["score"]
     assert last["s"] == [board["blue"], board["orange"]]
+    page.send(op="watch", kind="match", id="fast")  # a match that ended says so at once
+    page.recv_type("watching")
+    again = page.recv_type("final")
+    assert again["status"] == "finished" and again["summary"]["score"] == board
     page.close()
 
 

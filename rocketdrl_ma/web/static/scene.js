@@ -30,7 +30,8 @@ function arenaMeshes(arena) {
     return g;
   };
   const out = new THREE.Group();
-  out.add(new THREE.Mesh(make(groups.floor), new THREE.MeshLambertMaterial({ color: 0x2d5a3a })));
+  // the floor is flat: one colour, no per-pixel lighting (the largest area on screen; software renderers care)
+  out.add(new THREE.Mesh(make(groups.floor), new THREE.MeshBasicMaterial({ color: 0x2f5e3c })));
   // Faces point into the field: from a camera outside it, the near walls and the ceiling are culled away.
   out.add(new THREE.Mesh(make(groups.shell), new THREE.MeshLambertMaterial({
     color: 0x7d8fb3, transparent: true, opacity: 0.28, depthWrite: false })));
