@@ -288,11 +288,16 @@ export class View {
       if (away.lengthSq() < 1) away.set(-1, 0, 0);
       away.normalize();
       pos = new THREE.Vector3(car.x + away.x * 750, car.y + away.y * 750, car.z + 320);
+      if (this.arena) { // stay on the field's side of the walls (a camera box, not the arena's shape)
+        const f = this.arena.field;
+        pos.set(THREE.MathUtils.clamp(pos.x, 150 - f.extent_x, f.extent_x - 150),
+          THREE.MathUtils.clamp(pos.y, 150 - f.extent_y, f.extent_y - 150), THREE.MathUtils.clamp(pos.z, 60, f.height - 100));
+      }
       target = new THREE.Vector3().copy(ball).lerp(car, 0.25);
     } else {
       // beside the field (+x, so blue's goal is on the left), level with the ball along its length
-      pos = new THREE.Vector3(ball.x * 0.5 + 4600, ball.y * 0.9, 1900 + ball.z * 0.4);
-      target = new THREE.Vector3(ball.x, ball.y, 100 + ball.z * 0.6);
+      pos = new THREE.Vector3(ball.x * 0.35 + 5600, ball.y * 0.8, 2600 + ball.z * 0.3);
+      target = new THREE.Vector3(ball.x * 0.75, ball.y * 0.92, 100 + ball.z * 0.5);
     }
     const snap = this.cameraMode !== this._lastMode;
     this._lastMode = this.cameraMode;
