@@ -28,7 +28,7 @@ from typing import Callable
 from rocketdrl_ma.config import REPO_ROOT
 
 from .arena import arena_json
-from .feed import SOURCE_KINDS, FeedUpdate, SpectatorFeed
+from .feed import SOURCE_KINDS, FeedUpdate, Follower, SpectatorFeed
 from .frames import frame, pack_message, roster
 from .replays import ReplayLibrary
 
@@ -182,7 +182,17 @@ class PageServer:
 
     # -------------------------------------------------------------------------------------------- websocket
     async def _handler(self, ws) -> None:
-        follow: asyncio.Task | None = None
+        # the source this page follows: the task pumping it, and its follower (closed here too, since a task
+        # cancelled before it first ran never reaches its own clean-up)
+        follow: tuple[asyncio.Task, Follower] | None = None
+
+        def stop_following() -> None:
+            nonlocal follow
+            if follow is not None:
+                follow[0].cancel()
+                follow[1].close()
+                follow = None
+
         try:
             async for message in ws:
                 try:
@@ -192,9 +202,8 @@ class PageServer:
                     if not isinstance(request, dict):
                         raise ValueError("request: expected a JSON object")
                     op = request.get("op")
-                    if op in ("watch", "replay", "stop") and follow is not None:
-                        follow.cancel()
-                        follow = None
+                    if op in ("watch", "replay", "stop"):
+                        stop_following()
                     if op == "list":
                         await ws.send(pack_message(await self._list()))
                     elif op == "watch":
@@ -205,7 +214,7 @@ class PageServer:
                         if feed is None:
                             raise ValueError(f"zenoh: no match server reachable ({self._feed_error})")
                         follower = await asyncio.to_thread(feed.follow, kind, source_id)
-                        follow = asyncio.create_task(self._pump(ws, follower, kind, source_id))
+                        follow = (asyncio.create_task(self._pump(ws, follower, kind, source_id)), follower)
                     elif op == "replay":
                         reply = await asyncio.to_thread(self.library.open, request.get("id"))
                         await ws.send(pack_message(reply))
@@ -217,8 +226,7 @@ class PageServer:
                 except (ValueError, json.JSONDecodeError) as e:
                     await ws.send(pack_message({"type": "error", "error": str(e)}))
         finally:
-            if follow is not None:
-                follow.cancel()
+            stop_following()
 
     async def _pump(self, ws, follower, kind: str, source_id: str) -> None:
         """Send the newest state at most ``max_rate`` times a second (never two within one period), with
