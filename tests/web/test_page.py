@@ -149,3 +149,30 @@ def test_replay_seeks_and_steps_to_the_replays_states_and_shows_both_team_colour
         assert window.sum() >= 4, f"car of team {team} at pixel {(x, y)}: {window.sum()} pixels of its colour"
     page.close()
     assert errors == []
+
+
+def test_a_training_run_is_listed_and_shown_with_its_iteration(stack, tmp_path):
+    from rocketdrl_ma.policies.registry import load_policy
+    from rocketdrl_ma.web.training import TrainingBroadcast
+
+    broadcast = TrainingBroadcast("matches/1v1.yaml", "page-run", every=5, server="web",
+                                  env_overrides={"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 1.0},
+                                  connect=[stack["endpoint"]], replay_dir=tmp_path, speed=2.0)
+    try:
+        page, errors = open_page(stack, "")
+        page.wait_for_selector("#list-training li:has-text('page-run')", timeout=20_000)  # the list refreshes every 3 s
+        page.click("#list-training li:has-text('page-run')")
+        page.wait_for_function("window.__view.mode() === 'train'")
+        time.sleep(0.5)  # the page server's subscription reaches the training peer through the match server
+        assert broadcast.publish(5, load_policy("scripted:ball_chaser"))
+        page.wait_for_function("document.getElementById('title').textContent.includes('iteration 5')",
+                               timeout=30_000)
+        page.wait_for_function("window.__view.stats().frames > 10 && window.__view.roster().agents.length === 2",
+                               timeout=30_000)
+        assert page.evaluate("window.__view.ballPosition()") is not None
+        broadcast.wait(30.0)
+        page.wait_for_function("document.getElementById('title').textContent.includes('finished')", timeout=30_000)
+        page.close()
+    finally:
+        broadcast.close()
+    assert errors == []
