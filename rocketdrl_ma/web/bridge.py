@@ -176,7 +176,8 @@ class PageServer:
         if feed is not None:
             matches, training = await asyncio.gather(asyncio.to_thread(feed.matches),
                                                      asyncio.to_thread(feed.training_runs))
-        return {"type": "list", "matches": matches, "training": training, "replays": self.library.list(),
+        replays = await asyncio.to_thread(self.library.list)  # walks folders: off the event loop
+        return {"type": "list", "matches": matches, "training": training, "replays": replays,
                 "zenoh": {"server": feed.server if feed else None, "error": self._feed_error,
                           "connected": feed is not None}}
 
