@@ -67,14 +67,16 @@ def _free_endpoint() -> str:
 def run_remote(config: str, overrides: dict, seed: int, deadline_ms: float) -> dict:
     endpoint = _free_endpoint()
     with tempfile.TemporaryDirectory(prefix="server-overhead-") as tmp:
-        settings = ServerSettings.from_dict({"name": "bench", "zenoh": {"mode": "peer", "listen": [endpoint]}})
+        key_dir = os.path.join(tmp, "keys")
+        settings = ServerSettings.from_dict({"name": "bench", "zenoh": {"mode": "peer", "listen": [endpoint]},
+                                             "key_dir": key_dir})
         with MatchServer(settings, results_path=os.path.join(tmp, "results.sqlite")) as server:
             runner = server.create(MatchOptions.from_dict({
                 "config": config, "overrides": overrides, "deadline_ms": deadline_ms, "ready_timeout_s": 600.0,
-                "seed": seed}), "m")
+                "seed": seed, "open": True}), "m")
             bots = [subprocess.Popen(
                 [sys.executable, "-m", "rocketdrl_ma.cli", "bot", "--policy", POLICY, "--match", "m", "--slot", slot,
-                 "--server", "bench", "--connect", endpoint], cwd=ROOT, stdout=subprocess.DEVNULL,
+                 "--server", "bench", "--connect", endpoint, "--key-dir", key_dir], cwd=ROOT, stdout=subprocess.DEVNULL,
                 stderr=subprocess.PIPE, text=True) for slot in runner.slots]
             runner.join_thread()
             info = runner.inspect()

@@ -62,21 +62,24 @@ def play_local(cfg: LeagueConfig, match: ScheduledMatch) -> MatchResult:
 def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session) -> MatchResult:
     """A match on the match server: remote players are invited (``remote.invite``), the others join as
     ``PolicyBot``s from this process; the result is read back from the lobby once the match ends."""
-    from rocketdrl_ma.server.bot import LobbyClient, PolicyBot
+    from rocketdrl_ma.server.bot import PolicyBot
+    from rocketdrl_ma.server.client import LobbyClient
 
     from .remote import invite
 
     link = cfg.server
-    lobby = LobbyClient(session, link.name)
-    # a fresh id each attempt: a match interrupted on the server must not block its replay
-    match_id = f"{cfg.name}-{match.index}-{secrets.token_hex(3)}"
-    lobby.create(cfg.match, match_id, overrides=cfg.overrides, seed=match.seed, mode=link.mode,
-                 deadline_ms=link.deadline_ms, ready_timeout_s=2 * link.join_timeout_s, fill="idle")
+    lobby = LobbyClient(session, server=link.name)
     slots = slot_players(cfg, match)
     remote: dict[str, list[str]] = {}
     for slot, (name, spec) in slots.items():
         if spec is None:
             remote.setdefault(name, []).append(slot)
+    # Every seat is reserved: a remote entrant's for its user (the entrant's name), the others for ours.
+    seats = {slot: name if spec is None else lobby.user for slot, (name, spec) in slots.items()}
+    # a fresh id each attempt: a match interrupted on the server must not block its replay
+    match_id = f"{cfg.name}-{match.index}-{secrets.token_hex(3)}"
+    lobby.create(cfg.match, match_id, overrides=cfg.overrides, seed=match.seed, mode=link.mode,
+                 deadline_ms=link.deadline_ms, ready_timeout_s=2 * link.join_timeout_s, fill="idle", seats=seats)
     try:
         for name, its_slots in remote.items():
             invite(session, link.name, name, match_id, its_slots, link.join_timeout_s)

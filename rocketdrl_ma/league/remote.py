@@ -1,8 +1,10 @@
 """Remote entrants: a bot process waits for the league's invitations and plays them on the match server.
 
-The bot declares a queryable on ``rocketdrl/<server>/league/invite/<entrant>``; the league sends it a
-``get`` with ``{"match": id, "slots": [...]}`` right after creating the match, and the bot answers and
-joins those slots through the Bot SDK. The league retries while nobody answers (the bot may still be
+The bot declares a queryable on ``rocketdrl/<server>/u/<entrant>/invite`` (its own key prefix: with Zenoh
+access control only the entrant's user may answer there, and only admins may ask); the league creates the
+match with the entrant's slots reserved for the entrant's user (seats: no secret travels in the
+invitation), sends it a ``get`` with ``{"match": id, "slots": [...]}``, and the bot answers and joins those
+slots through the Bot SDK as that user. The league retries while nobody answers (the bot may still be
 starting); no answer within the server link's ``join_timeout_s`` means the entrant is not there, and
 the league stops (the match is stopped on the server and nothing is recorded for it).
 """
@@ -14,7 +16,7 @@ import threading
 import time
 from typing import Callable
 
-from rocketdrl_ma.server.protocol import pack, unpack
+from rocketdrl_ma.server.protocol import Keys, pack, unpack
 
 log = logging.getLogger(__name__)
 INVITE_TIMEOUT_S = 10.0
@@ -22,7 +24,7 @@ RETRY_S = 0.2  # between invitations while the entrant's bot is not there yet
 
 
 def invite_key(server: str, entrant: str) -> str:
-    return f"rocketdrl/{server}/league/invite/{entrant}"
+    return Keys(server).invite(entrant)
 
 
 def invite(session, server: str, entrant: str, match_id: str, slots: list[str],
@@ -75,7 +77,7 @@ def serve_invitations(session, server: str, entrant: str, make_bot: Callable[[],
             # Not daemon threads: Zenoh runs the callbacks a thread declares on a Python thread of the same
             # daemon-ness, and a daemon one may wake in interpreter shutdown and abort the process.
             threads = [threading.Thread(target=lambda s=slot: reports.append(
-                make_bot().run(match_id, s, server=server, session=session))) for slot in slots]
+                make_bot().run(match_id, s, server=server, session=session, user=entrant))) for slot in slots]
             for t in threads:
                 t.start()
             for t in threads:

@@ -1,16 +1,19 @@
 """The Zenoh face: a match server that remote bots join, the Bot SDK, spectating.
 
 ``rocketdrl_ma.server.Bot`` (subclass it, implement ``act``, call ``run``), ``PolicyBot``,
-``LobbyClient`` and ``MatchServer`` are imported on first use, so ``rocketdrl_ma.server.commands``
-(the CLI) loads nothing heavy.
+``Spectator`` (verified, typed states and events of a match), ``LobbyClient``, ``ClientSettings`` and
+``MatchServer`` are imported on first use, so ``rocketdrl_ma.server.commands`` (the CLI) loads nothing
+heavy.
 """
 from __future__ import annotations
 
 import importlib
 
-_EXPORTS = {"Bot": "bot", "PolicyBot": "bot", "LobbyClient": "bot", "JoinInfo": "bot", "BotReport": "bot",
-            "ServerError": "bot", "ServerGone": "bot", "MatchServer": "lobby", "ServerSettings": "settings",
-            "MatchOptions": "settings", "ZenohSettings": "settings", "PROTOCOL_VERSION": "protocol"}
+_EXPORTS = {"Bot": "bot", "PolicyBot": "bot", "BotReport": "bot", "LobbyClient": "client", "JoinInfo": "client",
+            "ServerError": "client", "ServerGone": "client", "MatchServer": "lobby", "ServerSettings": "settings",
+            "MatchOptions": "settings", "ZenohSettings": "settings", "ClientSettings": "settings",
+            "Spectator": "spectator", "StateUpdate": "spectator", "EventsUpdate": "spectator",
+            "MatchEnd": "spectator", "PROTOCOL_VERSION": "protocol"}
 __all__ = sorted(_EXPORTS)
 
 

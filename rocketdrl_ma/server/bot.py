@@ -12,33 +12,32 @@ builder (or the one it asks for with ``observation``), and answers in the match'
 the one it asks for with ``action``), so a policy trained on the env plays remotely unchanged.
 ``PolicyBot`` plays any ``load_policy`` spec (``scripted:ball_chaser``, ``checkpoint:PATH``) from the
 game state each message carries.
+
+A bot acts only on what the server signed for its own slot of this match, newer than what it saw last:
+forged, replayed or misdirected observations (and a forged ``done``) are dropped and counted in
+``BotReport.dropped``. Each action carries a MAC under the slot's secret, agreed at the join and never sent.
 """
 from __future__ import annotations
 
 import logging
 import threading
 import time
+from collections import Counter
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from .protocol import Keys, ProtocolError, decode_space, decode_state, pack, unpack
-from .settings import DEFAULT_ENDPOINT, ZenohSettings
+from .client import (JoinInfo, LobbyClient, SealedStream, ServerError, ServerGone, parse_rejoin_token,
+                     resolve_client)
+from .protocol import action_message, decode_state
+from .settings import DEFAULT_ENDPOINT, ClientSettings, ZenohSettings
 
 log = logging.getLogger(__name__)
-#: observations carry the game state; a generous bound that still refuses absurd messages
-MAX_OBS_BYTES = 16 * 1024 * 1024
 #: a bot that hears nothing for this long asks the lobby whether its match is still on
 IDLE_CHECK_S = 2.0
-
-
-class ServerError(RuntimeError):
-    """The server answered a request with an error (the message says why)."""
-
-
-class ServerGone(ConnectionError):
-    """The server's liveliness token disappeared, or no server answers on the lobby key."""
+__all__ = ["Bot", "BotReport", "JoinInfo", "LobbyClient", "PolicyBot", "ServerError", "ServerGone",
+           "local_client_settings"]
 
 
 def local_client_settings(connect: list[str] | None = None) -> ZenohSettings:
@@ -46,110 +45,43 @@ def local_client_settings(connect: list[str] | None = None) -> ZenohSettings:
     return ZenohSettings(mode="client", connect=tuple(connect or (DEFAULT_ENDPOINT,)))
 
 
-class LobbyClient:
-    """Requests to a server's lobby queryable over an open Zenoh session."""
-
-    def __init__(self, session, server: str = "local", timeout_s: float = 5.0):
-        self.session, self.keys, self.timeout_s = session, Keys(server), timeout_s
-
-    def request(self, op: str, **fields: Any) -> dict:
-        replies = self.session.get(self.keys.lobby, payload=pack({"op": op, **fields}), timeout=self.timeout_s)
-        for reply in replies:
-            if reply.ok is not None:
-                return unpack(reply.ok.payload.to_bytes(), MAX_OBS_BYTES)
-            raw = reply.err.payload.to_bytes()
-            try:
-                message = unpack(raw).get("error", raw)
-            except ProtocolError:
-                message = raw.decode("utf-8", "replace")  # Zenoh's own errors, e.g. "Timeout"
-            raise ServerError(f"{op}: {message}")
-        raise ServerGone(f"no match server {self.keys.server!r} answered on {self.keys.lobby}")
-
-    def create(self, config: str | dict, match_id: str | None = None, **options: Any) -> dict:
-        fields = {"config": config, **options}
-        if match_id is not None:
-            fields["id"] = match_id
-        return self.request("create", **fields)
-
-    def list(self) -> list[dict]:
-        return self.request("list")["matches"]
-
-    def inspect(self, match: str) -> dict:
-        return self.request("inspect", match=match)
-
-    def stop(self, match: str, **fields: Any) -> dict:
-        return self.request("stop", match=match, **fields)
-
-    def join(self, match: str, slot: str | None = None, **fields: Any) -> "JoinInfo":
-        return JoinInfo.from_reply(self.request("join", match=match, slot=slot, **fields))
-
-    def leave(self, match: str, token: str) -> dict:
-        return self.request("leave", match=match, token=token)
-
-
-@dataclass
-class JoinInfo:
-    """The server's answer to a join: the seat, its secret token, and what the match looks like."""
-    match: str
-    slot: str
-    token: str
-    lease: str
-    status: str
-    mode: str
-    deadline_ms: float
-    decision_ticks: int
-    config: dict
-    observation: dict
-    action: dict
-    observation_space: Any
-    action_space: Any
-    keys: dict
-
-    @classmethod
-    def from_reply(cls, r: dict) -> "JoinInfo":
-        return cls(match=r["match"], slot=r["slot"], token=r["token"], lease=r["lease"], status=r["status"],
-                   mode=r["mode"], deadline_ms=r["deadline_ms"], decision_ticks=r["decision_ticks"],
-                   config=r["config"], observation=r["observation"], action=r["action"],
-                   observation_space=decode_space(r["observation_space"]),
-                   action_space=decode_space(r["action_space"]), keys=r["keys"])
-
-
 @dataclass
 class BotReport:
     """How a bot's match went from its side."""
     match: str
     slot: str
-    token: str
+    rejoin_token: str
     decisions: int = 0  # actions sent
     reason: str = ""  # finished | stopped
     summary: dict | None = None
     errors: list[str] = field(default_factory=list)  # why the server refused some of our actions
+    dropped: Counter = field(default_factory=Counter)  # messages that failed the checks, by reason
 
 
 class _Mailbox:
-    """The newest observation message (older unread ones are dropped: a bot always answers the latest)."""
+    """The newest verified observation (older unread ones are dropped: a bot always answers the latest)."""
 
     def __init__(self):
         self._cond = threading.Condition()
-        self._latest: bytes | None = None
-        self.server_gone = False
+        self._latest: dict | None = None
+        self.server_left = False  # the server's liveliness token went away (checked with the lobby)
         self.errors: list[str] = []
 
-    def put(self, raw: bytes) -> None:
+    def put(self, body: dict) -> None:
         with self._cond:
-            self._latest = raw
+            self._latest = body
             self._cond.notify()
 
-    def take(self, timeout_s: float) -> bytes | None:
+    def take(self, timeout_s: float) -> dict | None:
         with self._cond:
-            if self._latest is None and not self.server_gone:
+            if self._latest is None and not self.server_left:
                 self._cond.wait(timeout_s)
-            raw, self._latest = self._latest, None
-            return raw
+            body, self._latest = self._latest, None
+            return body
 
-    def gone(self) -> None:
+    def left(self) -> None:
         with self._cond:
-            self.server_gone = True
+            self.server_left = True
             self._cond.notify()
 
 
@@ -187,40 +119,55 @@ class Bot:
     def on_end(self, info: dict) -> None:
         """The match ended: ``info`` as in ``act`` plus ``summary`` and ``reason`` (finished / stopped)."""
 
-    def run(self, match: str, slot: str | None = None, *, server: str = "local",
-            zenoh: ZenohSettings | None = None, token: str | None = None, session=None,
-            idle_timeout_s: float | None = None, on_joined=None) -> BotReport:
-        """Join ``match`` (the named slot, any open one, or with ``token`` the slot it held) and play until
-        the match ends. ``zenoh`` defaults to a client of a server on this machine; pass ``session`` to
-        share an open Zenoh session. ``idle_timeout_s``: give up after this long without a message.
-        ``on_joined(join)`` is called right after the join (e.g. to print the token)."""
+    def run(self, match: str, slot: str | None = None, *, client: ClientSettings | None = None, session=None,
+            ticket: str | None = None, rejoin: str | None = None, idle_timeout_s: float | None = None,
+            on_joined=None, **client_fields: Any) -> BotReport:
+        """Join ``match`` (the named slot, or any this user may take) and play until the match ends.
+
+        ``client`` (or its fields as keywords: ``server=``, ``zenoh=``, ``user=``, ``server_key=``...) says
+        how to reach and trust the server; the default is a client of a server on this machine. Pass
+        ``session`` to share an open Zenoh session. ``ticket``: the slot's ticket from the match's creator
+        (not needed for open matches and seats). ``rejoin``: the ``<slot>:<secret>`` token of a slot this
+        bot held before a crash. ``idle_timeout_s``: give up after this long without a message.
+        ``on_joined(join)`` is called right after the join (e.g. to print ``join.rejoin_token``)."""
+        client = resolve_client(client, **client_fields)
         own = session is None
-        session = session if session is not None else (zenoh or local_client_settings()).open()
+        session = session if session is not None else client.zenoh.open()
         declared: list[Any] = []
         try:
-            lobby = LobbyClient(session, server)
-            join = lobby.join(match, slot, token=token, name=self.name, observation=self.observation,
-                              action=self.action, with_state=self.with_state)
+            lobby = LobbyClient(session, client)
+            if rejoin is not None:
+                rejoin_slot, secret = parse_rejoin_token(rejoin)
+                join = lobby.rejoin(match, rejoin_slot, secret)
+            else:
+                join = lobby.join(match, slot, ticket=ticket, name=self.name, observation=self.observation,
+                                  action=self.action, with_state=self.with_state)
             if on_joined is not None:
                 on_joined(join)
-            report = BotReport(match, join.slot, join.token)
+            report = BotReport(match, join.slot, join.rejoin_token)
             from zenoh import SampleKind as zenoh_kinds
             mailbox = _Mailbox()
             liveliness = session.liveliness()
+            stream = lambda kinds: SealedStream(lobby.server_key, client.server, match, join.instance,  # noqa: E731
+                                                kinds, slot=join.slot, dropped=report.dropped)
+            observations, errors = stream(("obs",)), stream(("error",))
+
+            def on_obs(sample) -> None:
+                body = observations.open(sample.payload.to_bytes())
+                if body is not None:
+                    mailbox.put(body)
+
+            def on_error(sample) -> None:
+                body = errors.open(sample.payload.to_bytes())
+                if body is not None:
+                    mailbox.errors.append(str(body.get("error")))
+                    log.warning("server refused an action of %s: %s", join.slot, body.get("error"))
 
             def on_server(sample) -> None:
                 if sample.kind == zenoh_kinds.DELETE:
-                    mailbox.gone()
+                    mailbox.left()
 
-            def on_error(sample) -> None:
-                try:
-                    message = unpack(sample.payload.to_bytes()).get("error", "?")
-                except ProtocolError as e:
-                    message = str(e)
-                mailbox.errors.append(str(message))
-                log.warning("server refused an action of %s: %s", join.slot, message)
-
-            declared.append(session.declare_subscriber(join.keys["obs"], lambda s: mailbox.put(s.payload.to_bytes())))
+            declared.append(session.declare_subscriber(join.keys["obs"], on_obs))
             declared.append(session.declare_subscriber(join.keys["error"], on_error))
             declared.append(liveliness.declare_subscriber(join.keys["server_alive"], on_server, history=True))
             publisher = session.declare_publisher(join.keys["act"], express=True)
@@ -244,39 +191,37 @@ class Bot:
               idle_timeout_s: float | None) -> None:
         last_message = last_check = time.monotonic()
         while True:
-            raw = mailbox.take(0.5)
-            if raw is None:
+            body = mailbox.take(0.5)
+            if body is None:
                 now = time.monotonic()
-                if mailbox.server_gone:
-                    raise ServerGone(f"the match server left (liveliness {join.keys['server_alive']} is gone)")
                 if idle_timeout_s is not None and now - last_message > idle_timeout_s:
                     raise TimeoutError(f"no message from match {join.match!r} for {idle_timeout_s} s")
-                if now - max(last_message, last_check) > IDLE_CHECK_S:
-                    # Quiet for a while: not started yet, or did we miss the end? Ask the lobby.
-                    last_check = now
+                if mailbox.server_left or now - max(last_message, last_check) > IDLE_CHECK_S:
+                    # Quiet for a while, or the server's liveliness went away (anyone may declare and drop
+                    # a token on that key, so only a lobby without a signed reply means it is gone):
+                    # not started yet, or did we miss the end? Ask the lobby.
+                    mailbox.server_left, last_check = False, now
                     try:
                         info = lobby.inspect(join.match)
                     except ServerError:  # the server no longer knows the match: long over
-                        info = {"status": "finished"}
-                    if info["status"] in ("finished", "stopped", "failed"):
+                        info = {"status": "finished", "instance": join.instance}
+                    if info.get("instance") != join.instance or info["status"] in ("finished", "stopped", "failed"):
                         report.summary, report.reason = info.get("summary"), info["status"]
                         self.on_end({"agent": join.slot, "done": True, "summary": report.summary,
                                      "reason": report.reason, "state": None})
                         return
                 continue
             last_message = time.monotonic()
-            message = unpack(raw, MAX_OBS_BYTES)
-            info = {"agent": join.slot, "decision": message["decision"], "reward": message["reward"],
-                    "scoreboard": message["scoreboard"], "events": message["events"], "done": message["done"],
-                    "state": decode_state(message["state"]) if "state" in message else None}
-            if message["done"]:
-                report.summary, report.reason = message.get("summary"), message.get("reason", "finished")
+            info = {"agent": join.slot, "decision": body["decision"], "reward": body["reward"],
+                    "scoreboard": body["scoreboard"], "events": body["events"], "done": body["done"],
+                    "state": decode_state(body["state"]) if "state" in body else None}
+            if body["done"]:
+                report.summary, report.reason = body.get("summary"), body.get("reason", "finished")
                 info.update(summary=report.summary, reason=report.reason)
                 self.on_end(info)
                 return
-            action = self.act(np.asarray(message["obs"]), info)
-            publisher.put(pack({"token": join.token, "decision": message["decision"],
-                                "action": _wire_action(action)}))
+            action = self.act(np.asarray(body["obs"]), info)
+            publisher.put(action_message(join.secret, join.match, join.slot, body["decision"], _wire_action(action)))
             report.decisions += 1
 
 

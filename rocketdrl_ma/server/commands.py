@@ -1,4 +1,4 @@
-"""``rocketdrl-ma serve | bot | watch | lobby | router`` (standard library at the top: ``--help`` stays fast)."""
+"""``rocketdrl-ma serve | bot | watch | lobby | router | keys`` (standard library at the top: ``--help`` stays fast)."""
 from __future__ import annotations
 
 import argparse
@@ -21,17 +21,31 @@ def _clean_errors(run):
 
 
 def _client_settings(args: argparse.Namespace):
-    from .settings import ZenohSettings, load_zenoh_settings
+    """A ``ClientSettings`` from ``--config`` (a client YAML) and the flags that override it."""
+    from .settings import ClientSettings, ZenohSettings
+    fields = {"server": args.server, "server_key": args.server_key, "user": args.user,
+              "admin_secret_file": getattr(args, "admin_secret_file", None), "key_dir": args.key_dir}
+    fields = {k: v for k, v in fields.items() if v is not None}
     if args.config:
-        return load_zenoh_settings(args.config)
-    return ZenohSettings(mode="client", connect=tuple(args.connect or [DEFAULT_CONNECT]))
+        client = ClientSettings.load(args.config, **fields)
+        return client.replace(zenoh=client.zenoh.with_overrides(connect=args.connect)) if args.connect else client
+    return ClientSettings.from_dict({"zenoh": ZenohSettings(mode="client", connect=tuple(args.connect or
+                                                                                       [DEFAULT_CONNECT])),
+                                     **fields})
 
 
 def _add_client_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--server", default="local", help="the server's name (rocketdrl/<server>/...)")
-    p.add_argument("--config", default=None, help="a YAML with a zenoh: section (e.g. server/client.yaml)")
+    p.add_argument("--server", default=None, help="the server's name (rocketdrl/<server>/...; default local)")
+    p.add_argument("--config", default=None, help="a client YAML (e.g. server/client.yaml, or one written by "
+                                                  "`rocketdrl-ma keys`): zenoh, user, server_key")
     p.add_argument("--connect", action="append", default=None,
                    help=f"Zenoh endpoint of the server or router (client mode; default {DEFAULT_CONNECT})")
+    p.add_argument("--server-key", default=None,
+                   help="the server's public key to pin (ed25519:..., printed by `rocketdrl-ma serve`)")
+    p.add_argument("--user", default=None, help="this client's user (default: its Zenoh user, else guest)")
+    p.add_argument("--key-dir", default=None,
+                   help="where a server on this machine keeps server.pub and admin.secret (default "
+                        "runs/server/<server>)")
 
 
 def _run_serve(args: argparse.Namespace) -> int:
@@ -44,8 +58,9 @@ def _run_serve(args: argparse.Namespace) -> int:
 
     logging.basicConfig(level=getattr(logging, args.log_level.upper()), format="%(asctime)s %(name)s %(message)s")
     settings = ServerSettings.load(args.config)
-    if args.name:
-        settings = ServerSettings.from_dict({**_settings_dict(settings), "name": args.name})
+    if args.name or args.key_dir:
+        changes = {k: v for k, v in (("name", args.name), ("key_dir", args.key_dir)) if v}
+        settings = ServerSettings.from_dict({**_settings_dict(settings), **changes})
     if args.listen or args.connect:
         settings = ServerSettings.from_dict({**_settings_dict(settings),
                                              "zenoh": settings.zenoh.with_overrides(args.listen, args.connect)})
@@ -56,6 +71,10 @@ def _run_serve(args: argparse.Namespace) -> int:
         endpoints = ", ".join(settings.zenoh.listen_endpoints()) or "(none)"
         print(f"serving {settings.name!r}: {settings.zenoh.mode} listening on {endpoints}, "
               f"connected to {list(settings.zenoh.connect)}; results in {server.store.path}", flush=True)
+        access = (f"Zenoh users from {settings.access.users_file}, access control on" if settings.access.enabled
+                  else "no Zenoh authentication: anyone who reaches the endpoint may play open matches")
+        print(f"server key {server.identity.public_text} (clients pin it with --server-key); admin secret in "
+              f"{settings.keys_path / 'admin.secret'}; {access}", flush=True)
         stop.wait()
     return 0
 
@@ -71,26 +90,27 @@ def _run_bot(args: argparse.Namespace) -> int:
     bot = PolicyBot(args.policy, name=args.name)
 
     def joined(join) -> None:
-        print(f"joined match {join.match} as {join.slot} (status {join.status}); rejoin with --token {join.token}",
-              flush=True)
+        print(f"joined match {join.match} as {join.slot} (status {join.status}); after a crash, rejoin with "
+              f"--rejoin {join.rejoin_token}", flush=True)
 
-    report = bot.run(args.match, args.slot, server=args.server, zenoh=_client_settings(args), token=args.token,
-                     on_joined=joined)
+    report = bot.run(args.match, args.slot, client=_client_settings(args), ticket=args.ticket,
+                     rejoin=args.rejoin, on_joined=joined)
     score = (report.summary or {}).get("score", {})
     print(f"match {report.match} {report.reason}: blue {score.get('blue')} - {score.get('orange')} orange; "
           f"{report.decisions} actions sent by {report.slot}" +
-          (f"; {len(report.errors)} refused (last: {report.errors[-1]})" if report.errors else ""), flush=True)
+          (f"; {len(report.errors)} refused (last: {report.errors[-1]})" if report.errors else "") +
+          (f"; dropped {dict(report.dropped)}" if report.dropped else ""), flush=True)
     return 0
 
 
 def _run_watch(args: argparse.Namespace) -> int:
     from .watch import watch
 
-    final = watch(args.match, server=args.server, zenoh=_client_settings(args), video=args.video,
-                  replay=args.replay, live=not args.no_live, timeout_s=args.timeout)
-    summary = final.get("summary") or {}
-    print(f"match {args.match} {final['status']}: score {json.dumps(summary.get('score'))}; "
-          f"result {final.get('result_key')}" + (f"; video {args.video}" if args.video else ""), flush=True)
+    final = watch(args.match, client=_client_settings(args), video=args.video, replay=args.replay,
+                  live=not args.no_live, timeout_s=args.timeout)
+    summary = final.summary or {}
+    print(f"match {args.match} {final.status}: score {json.dumps(summary.get('score'))}; "
+          f"result {final.result_key}" + (f"; video {args.video}" if args.video else ""), flush=True)
     return 0
 
 
@@ -105,29 +125,44 @@ def _parse_set(items: list[str] | None) -> dict:
     return overrides
 
 
+def _parse_seats(items: list[str] | None) -> dict:
+    seats = {}
+    for item in items or []:
+        slot, sep, user = item.partition("=")
+        if not sep or not slot or not user:
+            raise ValueError(f"--seat: expected SLOT=USER, got {item!r}")
+        seats[slot] = user
+    return seats
+
+
 def _run_lobby(args: argparse.Namespace) -> int:
-    from .bot import LobbyClient
+    from .client import LobbyClient
 
     if args.action != "list" and not args.target:
-        raise ValueError(f"lobby {args.action}: needs a {'config path' if args.action == 'create' else 'match id'}")
-    session = _client_settings(args).open()
+        raise ValueError(f"lobby {args.action}: needs a {'config name' if args.action == 'create' else 'match id'}")
+    client = _client_settings(args)
+    session = client.zenoh.open()
     try:
-        client = LobbyClient(session, args.server)
-        admin = {"admin_token": args.admin_token} if args.admin_token else {}
+        lobby = LobbyClient(session, client)
         if args.action == "create":
             options = {k: v for k, v in (("mode", args.mode), ("deadline_ms", args.deadline_ms),
                                          ("replacement", args.replacement), ("ready_timeout_s", args.ready_timeout),
-                                         ("fill", args.fill), ("seed", args.seed)) if v is not None}
-            reply = client.create(args.target, args.id, overrides=_parse_set(args.set), **options, **admin)
+                                         ("fill", args.fill), ("seed", args.seed), ("open", args.open or None))
+                       if v is not None}
+            if args.seat:
+                options["seats"] = _parse_seats(args.seat)
+            reply = lobby.create(args.target, args.id, overrides=_parse_set(args.set), **options)
             print(f"created match {reply['id']} ({reply['mode']}, slots {list(reply['slot_status'])})")
+            for slot, ticket in reply["tickets"].items():
+                print(f"ticket {slot} {ticket}")
         elif args.action == "list":
-            for m in client.list():
+            for m in lobby.list():
                 print(f"{m['id']:12s} {m['status']:9s} {m['mode']:9s} {m['config']}  joined {m['joined']}/"
                       f"{m['slots']}  decision {m['decision']}  score {m['score']}")
         elif args.action == "inspect":
-            print(json.dumps(client.inspect(args.target), indent=2, default=str))
+            print(json.dumps(lobby.inspect(args.target), indent=2, default=str))
         else:
-            client.stop(args.target, **admin)
+            lobby.stop(args.target)
             print(f"stopping match {args.target}")
     finally:
         session.close()
@@ -135,12 +170,20 @@ def _run_lobby(args: argparse.Namespace) -> int:
 
 
 def _run_router(args: argparse.Namespace) -> int:
-    from .router import run_router
-    from .settings import load_zenoh_settings
+    from .router import RouterSettings, run_router
 
-    settings = load_zenoh_settings(args.config)
-    run_router(settings, ready=lambda s: print(f"router listening on {list(settings.listen_endpoints())}",
+    settings = RouterSettings.load(args.config)
+    run_router(settings, ready=lambda s: print(f"router listening on {list(settings.zenoh.listen_endpoints())}"
+                                               f"{'; access control for server ' + repr(settings.server_name) if settings.server_name else ''}",
                                                flush=True))
+    return 0
+
+
+def _run_keys(args: argparse.Namespace) -> int:
+    from .keygen import make_keys
+
+    for line in make_keys(args.config, tls_hosts=args.tls_host, connect=args.connect, clients_dir=args.clients):
+        print(line, flush=True)
     return 0
 
 
@@ -151,6 +194,7 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--connect", action="append", default=None, help="replace the connect endpoints")
     p.add_argument("--name", default=None, help="replace the server name")
     p.add_argument("--results", default=None, help="replace the results store path")
+    p.add_argument("--key-dir", default=None, help="replace the folder of the server's key and admin secret")
     p.add_argument("--log-level", default="info")
     p.set_defaults(run=_clean_errors(_run_serve))
 
@@ -158,7 +202,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--policy", required=True, help="a load_policy spec, e.g. scripted:ball_chaser")
     b.add_argument("--match", required=True)
     b.add_argument("--slot", default=None, help="e.g. blue_0 (default: any open slot)")
-    b.add_argument("--token", default=None, help="rejoin the slot this token holds")
+    b.add_argument("--ticket", default=None, help="the slot's ticket from the match's creator (hex)")
+    b.add_argument("--rejoin", default=None, help="SLOT:SECRET printed when the bot joined: take that slot back")
     b.add_argument("--name", default=None, help="the bot's name (default: the policy spec)")
     _add_client_options(b)
     b.set_defaults(run=_clean_errors(_run_bot))
@@ -174,7 +219,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
 
     lo = sub.add_parser("lobby", help="create, list, inspect or stop matches on a server")
     lo.add_argument("action", choices=["create", "list", "inspect", "stop"])
-    lo.add_argument("target", nargs="?", default=None, help="create: a config path; inspect/stop: a match id")
+    lo.add_argument("target", nargs="?", default=None, help="create: a config name (matches/2v2.yaml); "
+                                                            "inspect/stop: a match id")
     lo.add_argument("--id", default=None, help="create: the match id (default: random)")
     lo.add_argument("--mode", choices=["lockstep", "realtime"], default=None)
     lo.add_argument("--deadline-ms", type=float, default=None)
@@ -183,10 +229,25 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     lo.add_argument("--fill", default=None, help="policy spec for empty slots, or idle")
     lo.add_argument("--seed", type=int, default=None)
     lo.add_argument("--set", action="append", default=None, help="config override KEY=VALUE (YAML value)")
-    lo.add_argument("--admin-token", default=None)
+    lo.add_argument("--open", action="store_true", help="create: any player may join an empty slot (no tickets)")
+    lo.add_argument("--seat", action="append", default=None, help="create: SLOT=USER, a slot only USER may join")
+    lo.add_argument("--admin-secret-file", default=None,
+                    help="the server's admin secret, for create and stop (default <key-dir>/admin.secret)")
     _add_client_options(lo)
     lo.set_defaults(run=_clean_errors(_run_lobby))
 
     r = sub.add_parser("router", help="run a Zenoh router from Python (for play across machines)")
-    r.add_argument("config", help="a YAML with a zenoh: section in router mode, e.g. server/router.yaml")
+    r.add_argument("config", help="a router YAML (zenoh: section in router mode; serves: the server YAML whose "
+                                  "users and access control it enforces), e.g. server/router.yaml")
     r.set_defaults(run=_clean_errors(_run_router))
+
+    k = sub.add_parser("keys", help="make what a server config names but lacks: its key, admin secret, users "
+                                    "and passwords, TLS certificates, and one client YAML per user")
+    k.add_argument("config", help="a server YAML, e.g. server/lan.yaml")
+    k.add_argument("--tls-host", action="append", default=None,
+                   help="a host name or IP address clients reach the server (or router) by, for its certificate "
+                        "(default: the hosts of the config's listen/connect endpoints)")
+    k.add_argument("--connect", action="append", default=None,
+                   help="the endpoint written into the client YAMLs (default: the config's TLS listen endpoints)")
+    k.add_argument("--clients", default=None, help="folder for the client YAMLs (default <key_dir>/clients)")
+    k.set_defaults(run=_clean_errors(_run_keys))

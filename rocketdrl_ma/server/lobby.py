@@ -1,25 +1,97 @@
-"""The match server: one Zenoh session, the lobby queryable, bot liveliness, several matches at once.
+"""The match server: one Zenoh session, the lobby, the server's key, bot liveliness, several matches at once.
 
-Lobby requests are msgpack maps ``{"v": 1, "op": ..., ...}`` sent with a Zenoh ``get`` on
-``rocketdrl/<server>/lobby``; the reply is ``{"v": 1, "ok": true, ...}`` or an error reply
-``{"v": 1, "ok": false, "error": "..."}`` (ops: create, list, inspect, stop, join, leave).
+A lobby request is a Zenoh ``get`` on ``rocketdrl/<server>/u/<user>/lobby`` whose payload is the msgpack
+map ``{"v": 2, "op": ..., "nonce": <16+ random bytes>, "args": <bin: msgpack map of the op's fields>}``,
+plus ``"challenge"`` and ``"mac"`` for the ops that prove a secret (``crypto.request_mac``). The user in
+the key is who asks: with Zenoh access control on, nobody else can query that key. Every reply, ok or
+error, is sealed (signed) and echoes the request's ``op`` and ``nonce``: ``{"kind": "reply", "server",
+"op", "nonce", "ok": true, ...}`` or ``{..., "ok": false, "error": "..."}``.
+
+Ops: ``challenge`` (a single-use nonce for a MAC), ``list``, ``inspect``, ``create`` and ``stop`` (the
+admin role and the admin secret), ``join`` (an open match, the user's seat, or the slot's ticket),
+``rejoin`` and ``leave`` (the slot's secret).
 """
 from __future__ import annotations
 
 import logging
 import secrets
 import threading
+import time
+from collections import OrderedDict
+from pathlib import Path
 from typing import Any
 
+from rocketdrl_ma.config import load_config
 from rocketdrl_ma.results import MatchResult, ResultsStore
 
-from .match import ENDED, MatchRunner
-from .protocol import MAX_REQUEST_BYTES, Keys, ProtocolError, check_name, pack, unpack
-from .settings import MatchOptions, ServerSettings
-from .slots import same_token
+from .access import acl_config, read_users_file
+from .crypto import NONCE_BYTES, ServerIdentity, load_or_create_secret, random_bytes, request_mac, same_mac
+from .match import ENDED, INTERNAL_ERROR, JoinRequest, MatchRunner
+from .protocol import MAX_REQUEST_BYTES, Keys, ProtocolError, check_name, pack, seal, unpack, unpack_map
+from .settings import SERVER_USER, MatchOptions, ServerSettings
 
 log = logging.getLogger(__name__)
-ADMIN_OPS = ("create", "stop")
+OPS = ("challenge", "list", "inspect", "create", "stop", "join", "rejoin", "leave")
+PLAYER_OPS = ("join", "rejoin", "leave")
+CHALLENGE_TTL_S = 30.0
+MAX_CHALLENGES = 4096
+MAX_NONCE_BYTES = 64
+
+
+class RateLimiter:
+    """Token buckets: ``rate_per_s`` requests per user (``burst`` at once) and ten times that in total."""
+
+    def __init__(self, rate_per_s: float, burst: int, max_users: int = 4096):
+        self.rate, self.burst, self.max_users = rate_per_s, burst, max_users
+        self._buckets: OrderedDict[str, list[float]] = OrderedDict()
+        self._total = [burst * 10.0, time.monotonic()]
+        self._lock = threading.Lock()
+
+    def _take(self, bucket: list[float], rate: float, burst: float, now: float) -> bool:
+        bucket[0] = min(burst, bucket[0] + (now - bucket[1]) * rate)
+        bucket[1] = now
+        if bucket[0] < 1.0:
+            return False
+        bucket[0] -= 1.0
+        return True
+
+    def allow(self, user: str) -> bool:
+        if self.rate <= 0:
+            return True
+        now = time.monotonic()
+        with self._lock:
+            bucket = self._buckets.pop(user, None) or [float(self.burst), now]
+            self._buckets[user] = bucket
+            while len(self._buckets) > self.max_users:
+                self._buckets.popitem(last=False)
+            return self._take(bucket, self.rate, self.burst, now) and \
+                self._take(self._total, self.rate * 10, self.burst * 10, now)
+
+
+class Challenges:
+    """Single-use server nonces, each issued to one user, valid for ``CHALLENGE_TTL_S``."""
+
+    def __init__(self):
+        self._issued: OrderedDict[bytes, tuple[str, float]] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def issue(self, user: str) -> bytes:
+        now = time.monotonic()
+        with self._lock:
+            while self._issued and (len(self._issued) >= MAX_CHALLENGES or
+                                    next(iter(self._issued.values()))[1] < now):
+                self._issued.popitem(last=False)
+            challenge = random_bytes(NONCE_BYTES)
+            self._issued[challenge] = (user, now + CHALLENGE_TTL_S)
+            return challenge
+
+    def take(self, user: str, challenge: Any) -> bool:
+        """Whether ``challenge`` was issued to ``user`` and is still fresh; it is used up either way."""
+        if not isinstance(challenge, bytes):
+            return False
+        with self._lock:
+            issued = self._issued.pop(challenge, None)
+        return issued is not None and issued[0] == user and issued[1] >= time.monotonic()
 
 
 class MatchServer:
@@ -28,21 +100,49 @@ class MatchServer:
     def __init__(self, settings: ServerSettings, results_path: str | None = None):
         self.settings = settings
         self.keys = Keys(settings.name)
+        key_dir = settings.keys_path
+        self.identity = ServerIdentity.load_or_create(key_dir / "server.key")
+        self.admin_secret = load_or_create_secret(key_dir / "admin.secret")
         self.store = ResultsStore(results_path or settings.results)
         self.matches: dict[str, MatchRunner] = {}
         self._lock = threading.Lock()
         self._store_lock = threading.Lock()
+        self._rate = RateLimiter(settings.limits.requests_per_s, settings.limits.request_burst)
+        self._challenges = Challenges()
         self.session = None
         self._declared: list[Any] = []
         self.requests_rejected = 0
+        self.requests_limited = 0
 
     # ------------------------------------------------------------------------------------------ lifecycle
+    def zenoh_extra(self) -> dict[str, Any]:
+        """Zenoh config the server adds to its own: with users, authentication and the ACL on its session."""
+        access = self.settings.access
+        if not access.enabled:
+            return {}
+        zenoh = self.settings.zenoh
+        users = read_users_file(access.users_file)
+        extra: dict[str, Any] = {}
+        if zenoh.mode == "client":  # behind a router, which holds the ACL: the server is its user "server"
+            if SERVER_USER not in users:
+                raise ValueError(f"access.users_file: no {SERVER_USER!r} user to connect to the router as")
+            extra["transport/auth/usrpwd/user"] = SERVER_USER
+            extra["transport/auth/usrpwd/password"] = users[SERVER_USER]
+        else:
+            missing = sorted(set(access.roles) - set(users))
+            if missing:
+                raise ValueError(f"access.roles: users {missing} have no password in access.users_file")
+            extra["transport/auth/usrpwd/dictionary_file"] = str(Path(access.users_file))
+            extra["access_control"] = acl_config(self.settings.name, access.roles)
+        return extra
+
     def start(self) -> "MatchServer":
-        self.session = self.settings.zenoh.open()
+        self.session = self.settings.zenoh.open(self.zenoh_extra())
         try:
             s = self.session
             self._declared = [
-                s.declare_queryable(self.keys.lobby, self._on_query),
+                s.declare_queryable(self.keys.all_lobbies, self._on_query),
+                s.declare_queryable(self.keys.key, self._on_key_query),
                 s.liveliness().declare_subscriber(self.keys.all_bot_alive, self._on_liveliness, history=True),
                 s.liveliness().declare_token(self.keys.server_alive),
             ]
@@ -84,16 +184,37 @@ class MatchServer:
         with self._store_lock:
             self.store.append(result)
 
-    def create(self, options: MatchOptions, match_id: str | None = None) -> MatchRunner:
+    def create(self, options: MatchOptions, match_id: str | None = None, creator: str | None = None) -> MatchRunner:
+        """A new match. ``creator`` None: trusted (the server's YAML, or code); a user: the lobby's limits
+        apply (config names, bounds, quotas)."""
         match_id = check_name("id", match_id) if match_id is not None else secrets.token_hex(4)
+        limits = self.settings.limits
+        if creator is not None:
+            limits.check_config_name(options.config)
+            limits.check_options(options)
+            try:
+                limits.check_game(load_config(options.config, options.overrides))
+            except ValueError as e:
+                if "no such file" in str(e):  # never tell where the server looked
+                    raise ValueError(f"config: no config {options.config!r} on this server") from None
+                raise
         with self._lock:
             if match_id in self.matches:
                 raise ValueError(f"id: a match {match_id!r} already exists on server {self.settings.name!r}")
+            if creator is not None:
+                live = [m for m in self.matches.values() if m.live]
+                if len(live) >= limits.max_matches:
+                    raise ValueError(f"limit: this server runs at most {limits.max_matches} matches at once; "
+                                     "try again when one ends")
+                if sum(m.creator == creator for m in live) >= limits.max_matches_per_user:
+                    raise ValueError(f"limit: user {creator!r} already has {limits.max_matches_per_user} matches "
+                                     "waiting or running")
             self._forget_old()
-            runner = MatchRunner(match_id, options, self.session, self.keys, self._record)
+            runner = MatchRunner(match_id, options, self.session, self.keys, self.identity, self._record,
+                                 creator=creator, missed_streak=limits.missed_streak)
             self.matches[match_id] = runner
         runner.start()
-        log.info("match %s created (%s, %s)", match_id, options.config, options.mode)
+        log.info("match %s created by %s (%s, %s)", match_id, creator or "the server", options.config, options.mode)
         return runner
 
     def _forget_old(self) -> None:
@@ -115,49 +236,113 @@ class MatchServer:
         parsed = self.keys.parse_bot_alive(str(sample.key_expr))
         if parsed is None:
             return
-        match_id, slot, lease = parsed
+        user, match_id, slot, lease = parsed
         with self._lock:
             runner = self.matches.get(match_id)
         if runner is not None:
-            runner.set_alive(slot, lease, sample.kind == zenoh.SampleKind.PUT)
+            runner.set_alive(user, slot, lease, sample.kind == zenoh.SampleKind.PUT)
+
+    def _on_key_query(self, query) -> None:
+        """The server's public key, signed with it over the asker's nonce (so a replayed answer is stale)."""
+        payload = query.payload
+        nonce = payload.to_bytes() if payload is not None else b""
+        if len(nonce) > MAX_NONCE_BYTES:
+            return
+        query.reply(query.key_expr, seal(self.identity, {"kind": "key", "server": self.settings.name,
+                                                         "nonce": nonce, "key": self.identity.public_bytes}))
 
     def _on_query(self, query) -> None:
+        key = str(query.key_expr)
+        user = self.keys.parse_lobby_user(key)
+        if user is None:
+            return
+        if not self._rate.allow(user):
+            # unsigned and cheap: a flood must not make the server sign for it
+            self.requests_limited += 1
+            query.reply_err(pack({"ok": False, "error": "rate limited: too many lobby requests"}))
+            return
+        op, nonce = None, b""
         try:
             payload = query.payload
             if payload is None:
                 raise ProtocolError("message: the lobby needs a msgpack request as the query payload")
-            reply = self.handle(unpack(payload.to_bytes(), MAX_REQUEST_BYTES))
-            query.reply(self.keys.lobby, pack(reply))
+            request = unpack(payload.to_bytes(), MAX_REQUEST_BYTES)
+            op, nonce = request.get("op"), request.get("nonce")
+            if not isinstance(nonce, bytes) or not NONCE_BYTES <= len(nonce) <= MAX_NONCE_BYTES:
+                nonce = b""
+                raise ProtocolError(f"nonce: expected {NONCE_BYTES}-{MAX_NONCE_BYTES} random bytes")
+            reply = self.handle(user, request)
+            query.reply(key, self._reply(op, nonce, {"ok": True, **reply}))
         except ValueError as e:  # ProtocolError included: every bad request gets a reason back
             self.requests_rejected += 1
-            query.reply_err(pack({"ok": False, "error": str(e)}))
+            query.reply_err(self._reply(op, nonce, {"ok": False, "error": str(e)}))
         except Exception as e:
-            log.exception("lobby request failed")
-            query.reply_err(pack({"ok": False, "error": f"internal error: {type(e).__name__}: {e}"}))
+            log.exception("lobby request %r from %s failed (%s)", op, user, type(e).__name__)
+            query.reply_err(self._reply(op, nonce, {"ok": False, "error": INTERNAL_ERROR}))
 
-    def handle(self, request: dict) -> dict:
-        """Answer one lobby request (already decoded and version-checked)."""
+    def _reply(self, op: Any, nonce: bytes, body: dict) -> bytes:
+        return seal(self.identity, {"kind": "reply", "server": self.settings.name,
+                                    "op": op if isinstance(op, str) else None, "nonce": nonce, **body})
+
+    # ------------------------------------------------------------------------------------------ lobby ops
+    def handle(self, user: str, request: dict) -> dict:
+        """Answer one lobby request (already decoded and version-checked) from ``user``."""
         op = request.get("op")
-        if op in ADMIN_OPS and self.settings.admin_token is not None \
-                and not same_token(request.get("admin_token"), self.settings.admin_token):
-            raise ValueError(f"admin_token: op {op!r} needs this server's admin token")
-        if op == "create":
-            fields = {k: v for k, v in request.items() if k not in ("v", "op", "id", "admin_token")}
-            runner = self.create(MatchOptions.from_dict(fields, self.settings.match_defaults), request.get("id"))
-            return {"ok": True, **runner.inspect()}
+        if op not in OPS:
+            raise ValueError(f"op: unknown lobby op {op!r}; allowed: {list(OPS)}")
+        raw_args = request.get("args", b"\x80")
+        if not isinstance(raw_args, bytes):
+            raise ProtocolError("args: expected a bin holding the msgpack map of the op's fields")
+        args = unpack_map(raw_args, MAX_REQUEST_BYTES, "args")
+        access = self.settings.access
+        role = access.role(user)
+        if role is None:
+            raise ValueError(f"user: {user!r} has no role on this server")
+        challenge_used = []
+
+        def proves(key: bytes) -> bool:
+            """A MAC under ``key`` over a challenge this user was given (used up at the first check)."""
+            if not challenge_used:
+                challenge_used.append(self._challenges.take(user, request.get("challenge")))
+            return challenge_used[0] and same_mac(request.get("mac"), request_mac(
+                key, op, self.settings.name, user, request["challenge"], raw_args))
+
+        if op == "challenge":
+            return {"challenge": self._challenges.issue(user)}
         if op == "list":
             with self._lock:
                 runners = list(self.matches.values())
-            return {"ok": True, "server": self.settings.name, "matches": [m.summary() for m in runners]}
+            return {"server": self.settings.name, "matches": [m.summary() for m in runners]}
         if op == "inspect":
-            return {"ok": True, **self.match(request.get("match")).inspect()}
+            return self.match(args.get("match")).inspect()
+        if op in PLAYER_OPS and role == "spectator":
+            raise ValueError(f"op {op!r}: user {user!r} is a spectator on this server")
+        if op == "create":
+            self._check_admin(op, user, role, proves, allow_players=access.create == "player")
+            fields = {k: v for k, v in args.items() if k != "id"}
+            runner = self.create(MatchOptions.from_dict(fields, self.settings.match_defaults), args.get("id"),
+                                 creator=user)
+            return {**runner.inspect(), "tickets": runner.tickets}
         if op == "stop":
-            runner = self.match(request.get("match"))
+            runner = self.match(args.get("match"))
+            own = access.create == "player" and access.enabled and runner.creator == user
+            if not own:
+                self._check_admin(op, user, role, proves)
             runner.stop()
-            return {"ok": True, "match": runner.id}
+            return {"match": runner.id}
+        join = JoinRequest(user=user, args=args, nonce=request["nonce"], proves=proves)
+        runner = self.match(args.get("match"))
         if op == "join":
-            return self.match(request.get("match")).join(request)
-        if op == "leave":
-            return self.match(request.get("match")).leave(request)
-        raise ValueError(f"op: unknown lobby op {op!r}; allowed: ['create', 'list', 'inspect', 'stop', 'join', "
-                         "'leave']")
+            return runner.join(join)
+        if op == "rejoin":
+            return runner.rejoin(join)
+        return runner.leave(join)
+
+    def _check_admin(self, op: str, user: str, role: str, proves, allow_players: bool = False) -> None:
+        if allow_players and role in ("admin", "player"):
+            return
+        if self.settings.access.enabled and role != "admin":
+            raise ValueError(f"op {op!r}: needs the admin role; user {user!r} is a {role}")
+        if not proves(self.admin_secret):
+            raise ValueError(f"op {op!r}: needs the admin secret: a MAC over a fresh challenge (op challenge) "
+                             "under this server's admin secret")

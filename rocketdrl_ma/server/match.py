@@ -1,18 +1,21 @@
 """One match on the server: its slots, joining and leaving, the lockstep or real-time loop, the result.
 
 Each match runs in its own thread. Bots' actions arrive on Zenoh callback threads (``on_action``):
-they are decoded, checked (size, protocol version, the slot's token, the decision number, the
-action's shape and range) and parsed into ``CarControls`` there, so nothing a bot sends can reach the
-env unchecked. The match thread only waits, up to the deadline, for the actions of connected bots.
+they are checked (size, protocol version, that the key's user holds the slot, the MAC under the slot's
+secret, the decision number, the action's shape and range) and parsed into ``CarControls`` there, so
+nothing a bot sends can reach the env unchecked, and nobody but the slot's bot can act for its car.
+Everything the match publishes is signed by the server (``protocol.seal``) and numbered (``seq``).
 """
 from __future__ import annotations
 
+import itertools
 import logging
 import threading
 import time
 import traceback
 import uuid
 from collections import Counter
+from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
@@ -24,23 +27,37 @@ from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.results import MatchResult
 
-from .protocol import (MAX_ACTION_BYTES, Keys, ProtocolError, VersionError, encode_space, encode_state, pack,
-                       pack_value, pack_with_raw, unpack)
+from .crypto import KeyExchange, ServerIdentity, action_mac, random_bytes, same_mac
+from .protocol import (Keys, ProtocolError, VersionError, encode_space, encode_state, pack_value, seal,
+                       split_action, unpack_map)
 from .settings import MatchOptions
-from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations, same_token
+from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations
 
 log = logging.getLogger(__name__)
 REALTIME_TICK_HZ = 120.0
 ENDED = ("finished", "stopped", "failed")  # a match is waiting, then running, then one of these
+INTERNAL_ERROR = "internal error (details in the server's log)"
+_MAX_SPEC_NAME = 64
+
+
+@dataclass
+class JoinRequest:
+    """A join, rejoin or leave as the lobby hands it to the match: who asks (the user of the lobby key),
+    the decoded ``args``, the request's ``nonce``, and ``proves(key)``: whether the request carries a valid
+    MAC under ``key`` over a fresh challenge (``crypto.request_mac``)."""
+    user: str
+    args: dict
+    nonce: bytes
+    proves: Callable[[bytes], bool]
 
 
 def _spec(value: Any, field: str) -> dict:
     """``"ray"`` or ``{"name": "ray", "n_rays": 12}`` -> a spec mapping; anything else is a ValueError."""
-    if isinstance(value, str):
-        return {"name": value}
-    if isinstance(value, dict) and isinstance(value.get("name"), str):
-        return dict(value)
-    raise ValueError(f"{field}: expected a name or a mapping with 'name' and its options, got {value!r}")
+    spec = {"name": value} if isinstance(value, str) else dict(value) if isinstance(value, dict) else None
+    if spec is None or not isinstance(spec.get("name"), str) or not 0 < len(spec["name"]) <= _MAX_SPEC_NAME:
+        raise ValueError(f"{field}: expected a name (at most {_MAX_SPEC_NAME} characters) or a mapping with "
+                         f"'name' and its options, got {value!r}")
+    return spec
 
 
 def _percentile_ms(values: list[float], q: float) -> float | None:
@@ -48,11 +65,13 @@ def _percentile_ms(values: list[float], q: float) -> float | None:
 
 
 class MatchRunner:
-    """A match from creation to its result. ``session`` is the server's Zenoh session."""
+    """A match from creation to its result. ``session`` is the server's Zenoh session, ``identity`` its
+    signing key; ``creator`` the user who created it (None: the server's own YAML)."""
 
-    def __init__(self, match_id: str, options: MatchOptions, session, keys: Keys,
-                 record: Callable[[MatchResult], None]):
+    def __init__(self, match_id: str, options: MatchOptions, session, keys: Keys, identity: ServerIdentity,
+                 record: Callable[[MatchResult], None], creator: str | None = None, missed_streak: int = 0):
         self.id, self.options, self.session, self.keys, self._record = match_id, options, session, keys, record
+        self.identity, self.creator, self.missed_streak = identity, creator, missed_streak
         overrides = dict(options.overrides)
         env_config = load_config(options.config, overrides)  # ValueError naming the key if bad
         self.config = env_config
@@ -64,12 +83,23 @@ class MatchRunner:
                 overrides["max_cycles"] = env_config["max_cycles"] * self.decision_ticks
         self.env = rocketdrl_ma.parallel_env(options.config, **overrides)
         self.slots: dict[str, Slot] = {agent: Slot(agent) for agent in self.env.possible_agents}
+        unknown = sorted(set(options.seats) - set(self.slots))
+        if unknown:
+            self.env.close()
+            raise ValueError(f"seats: {unknown} are not slots of this match; slots: {list(self.slots)}")
+        self.tickets: dict[str, str] = {}
+        for slot in self.slots.values():
+            slot.seat = options.seats.get(slot.name)
+            if not options.open and slot.seat is None:
+                slot.ticket = random_bytes()
+                self.tickets[slot.name] = slot.ticket.hex()
         self._match_parser = self.env.action_parser
         self._obs = SlotObservations(self.env.obs_builder, self.slots)
         self.env.obs_builder = self._obs
         self.env.action_parser = ControlsPassThrough(self._match_parser)
         self._fill: dict[str, Any] = {}
         self.status = "waiting"
+        self.instance = uuid.uuid4().hex  # tells this match from an earlier one of the same id
         self.created_at = time.time()
         self.started_at: float | None = None
         self.seed = options.seed if options.seed is not None else int.from_bytes(uuid.uuid4().bytes[:4], "little")
@@ -79,6 +109,7 @@ class MatchRunner:
         self.decision = 0  # the decision whose actions are being collected
         self.scoreboard: dict = {}
         self.rejected: Counter = Counter()
+        self._seq = itertools.count()
         self._event_counts: Counter = Counter()
         self._goals: list[dict] = []
         self._decision_s: list[float] = []
@@ -86,94 +117,138 @@ class MatchRunner:
         self._cond = threading.Condition()
         self._stop = threading.Event()
         self._publishers: dict[str, Any] = {}
-        self._act_sub = session.declare_subscriber(keys.all_actions(match_id), self.on_action)
+        # One subscriber per taken slot, on that slot's own key: with access control, Zenoh tells a client
+        # about a subscriber only if the key lies within what the client may use (its own prefix).
+        self._act_subs: dict[str, Any] = {}
         self._thread = threading.Thread(target=self._run, name=f"match-{match_id}", daemon=True)
 
     def start(self) -> None:
         self._thread.start()
 
+    @property
+    def live(self) -> bool:
+        return self.status not in ENDED
+
     # ------------------------------------------------------------------------------------------ lobby side
-    def join(self, request: dict) -> dict:
-        """Seat a bot (any open slot or the named one) or, given its token, reconnect it to its slot."""
-        name = request.get("name", "bot")
+    def join(self, request: JoinRequest) -> dict:
+        """Seat a bot in the named open slot, or the first one it may take: the match is open, the slot is the
+        user's seat, or the request proves the slot's ticket. The slot's secret comes from the X25519
+        exchange (``client_key``)."""
+        args = request.args
+        name = args.get("name", "bot")
         if not isinstance(name, str) or not 0 < len(name) <= 64:
             raise ValueError(f"name: expected a bot name of 1-64 characters, got {name!r}")
-        wanted = request.get("slot")
-        if wanted is not None and wanted not in self.slots:
-            raise ValueError(f"slot: {wanted!r} is not a slot of match {self.id!r}; slots: {list(self.slots)}")
+        wanted = self._slot_arg(args, required=False)
+        exchange = KeyExchange()
         with self._cond:
-            token = request.get("token")
-            if token is not None:
-                slot = next((s for s in self.slots.values() if same_token(token, s.token)), None)
-                if slot is None or slot.left or (wanted is not None and wanted != slot.name):
-                    raise ValueError(f"token: not valid for {'slot ' + repr(wanted) if wanted else 'any slot'} "
-                                     f"of match {self.id!r}")
-                slot.new_lease()
+            if self.status != "waiting":
+                raise ValueError(f"match {self.id!r} is {self.status}; only its own bots can rejoin (op rejoin)")
+            open_slots = [s for s in self.slots.values() if s.occupant == "open"]
+            if wanted is not None:
+                slot = self.slots[wanted]
+                if slot.occupant != "open":
+                    raise ValueError(f"slot: {wanted!r} of match {self.id!r} is taken; open slots: "
+                                     f"{[s.name for s in open_slots]}")
+                if not self._may_take(slot, request):
+                    raise ValueError(f"slot: {wanted!r} of match {self.id!r} is reserved: " +
+                                     (f"it is user {slot.seat!r}'s seat" if slot.seat else
+                                      "join with its ticket (from the match's creator)"))
             else:
-                if self.status != "waiting":
-                    raise ValueError(f"match {self.id!r} is {self.status}; only a bot holding its slot token can "
-                                     "rejoin")
-                open_slots = [s for s in self.slots.values() if s.occupant == "open"]
-                if wanted is not None:
-                    slot = self.slots[wanted]
-                    if slot.occupant != "open":
-                        raise ValueError(f"slot: {wanted!r} of match {self.id!r} is taken; open slots: "
-                                         f"{[s.name for s in open_slots]}")
-                elif open_slots:
-                    slot = open_slots[0]
-                else:
-                    raise ValueError(f"match {self.id!r} has no open slot")
-                obs_builder = action_parser = None
-                obs_spec = action_spec = None
-                if request.get("observation") is not None:
-                    obs_spec = _spec(request["observation"], "observation")
-                    options = {k: v for k, v in obs_spec.items() if k != "name"}
-                    obs_builder = make_obs_builder(obs_spec["name"], **options)
-                    obs_builder.space(self.env.rules.blue_size, self.env.rules.orange_size)  # fits this match?
-                if request.get("action") is not None:
-                    action_spec = _spec(request["action"], "action")
-                    action_parser = make_action_parser(action_spec["name"],
-                                                       **{k: v for k, v in action_spec.items() if k != "name"})
-                slot.take(name)
-                slot.obs_spec, slot.action_spec = obs_spec, action_spec
-                slot.obs_builder, slot.action_parser = obs_builder, action_parser
-                slot.with_state = bool(request.get("with_state", True))
+                slot = next((s for s in open_slots if self._may_take(s, request)), None)
+                if slot is None:
+                    raise ValueError(f"match {self.id!r} has no open slot for user {request.user!r}" +
+                                     ("" if not open_slots or self.options.open else
+                                      "; its slots need a ticket or a seat"))
+            obs_builder = action_parser = None
+            obs_spec = action_spec = None
+            if args.get("observation") is not None:
+                obs_spec = _spec(args["observation"], "observation")
+                options = {k: v for k, v in obs_spec.items() if k != "name"}
+                obs_builder = make_obs_builder(obs_spec["name"], **options)
+                obs_builder.space(self.env.rules.blue_size, self.env.rules.orange_size)  # fits this match?
+            if args.get("action") is not None:
+                action_spec = _spec(args["action"], "action")
+                action_parser = make_action_parser(action_spec["name"],
+                                                   **{k: v for k, v in action_spec.items() if k != "name"})
+            secret = exchange.slot_secret(args.get("client_key"), request.nonce, self.keys.server, self.id, slot.name)
+            slot.take(name, request.user, secret)
+            slot.obs_spec, slot.action_spec = obs_spec, action_spec
+            slot.obs_builder, slot.action_parser = obs_builder, action_parser
+            slot.with_state = bool(args.get("with_state", True))
+            self._listen_for_actions(slot)
+            self._cond.notify_all()
+            return {**self._join_reply(slot), "server_key_exchange": exchange.public_bytes}
+
+    def _listen_for_actions(self, slot: Slot) -> None:
+        old = self._act_subs.pop(slot.name, None)
+        if old is not None:
+            old.undeclare()
+        key = self.keys.slot(slot.user, self.id, slot.name, "act")
+        self._act_subs[slot.name] = self.session.declare_subscriber(key, lambda sample: self.on_action(slot, sample))
+
+    def _may_take(self, slot: Slot, request: JoinRequest) -> bool:
+        if slot.seat is not None:
+            return slot.seat == request.user
+        return self.options.open or (slot.ticket is not None and request.proves(slot.ticket))
+
+    def _slot_arg(self, args: dict, required: bool = True) -> str | None:
+        wanted = args.get("slot")
+        if wanted is None and not required:
+            return None
+        if wanted not in self.slots:
+            raise ValueError(f"slot: {wanted!r} is not a slot of match {self.id!r}; slots: {list(self.slots)}")
+        return wanted
+
+    def _own_slot(self, request: JoinRequest) -> Slot:
+        """The slot a rejoin or leave names, if the request proves its secret (and comes from its user)."""
+        slot = self.slots[self._slot_arg(request.args)]
+        if slot.secret is None or slot.left or slot.user != request.user or not request.proves(slot.secret):
+            raise ValueError(f"slot: this request does not prove the secret of slot {slot.name!r} of match "
+                             f"{self.id!r} (for user {request.user!r})")
+        return slot
+
+    def rejoin(self, request: JoinRequest) -> dict:
+        """A bot back after a crash: same slot, same secret, a new lease for its new liveliness token."""
+        with self._cond:
+            slot = self._own_slot(request)
+            slot.new_lease()
             self._cond.notify_all()
             return self._join_reply(slot)
 
     def _join_reply(self, slot: Slot) -> dict:
         rules = self.env.rules
         obs_space = (slot.obs_builder or self._obs.default).space(rules.blue_size, rules.orange_size)
+        keys = {leaf: self.keys.slot(slot.user, self.id, slot.name, leaf) for leaf in ("obs", "act", "error")}
         return {
-            "ok": True, "match": self.id, "slot": slot.name, "token": slot.token, "lease": slot.lease,
+            "match": self.id, "instance": self.instance, "slot": slot.name, "user": slot.user, "lease": slot.lease,
             "status": self.status, "config": self.config, "mode": self.options.mode,
             "deadline_ms": self.options.deadline_ms, "decision_ticks": self.decision_ticks,
-            "tick_rate": int(REALTIME_TICK_HZ),
+            "tick_rate": int(REALTIME_TICK_HZ), "server_key": self.identity.public_text,
             "observation": slot.obs_spec or self.config["observation"],
             "action": slot.action_spec or self.config["action"],
             "observation_space": encode_space(obs_space),
             "action_space": encode_space((slot.action_parser or self._match_parser).space()),
-            "keys": {leaf: self.keys.slot(self.id, slot.name, leaf) for leaf in ("obs", "act", "error")}
-            | {"alive": self.keys.bot_alive(self.id, slot.name, slot.lease), "state": self.keys.state(self.id),
-               "events": self.keys.events(self.id), "server_alive": self.keys.server_alive},
+            "keys": keys | {"alive": self.keys.bot_alive(slot.user, self.id, slot.name, slot.lease),
+                            "state": self.keys.state(self.id), "events": self.keys.events(self.id),
+                            "server_alive": self.keys.server_alive},
         }
 
-    def leave(self, request: dict) -> dict:
+    def leave(self, request: JoinRequest) -> dict:
         with self._cond:
-            slot = next((s for s in self.slots.values() if same_token(request.get("token"), s.token)), None)
-            if slot is None:
-                raise ValueError(f"token: not valid for any slot of match {self.id!r}")
+            slot = self._own_slot(request)
             if self.status == "waiting":
                 slot.release()
-            else:  # mid-match the seat stays, played by replacement actions; the token stops working
-                slot.left, slot.token, slot.alive = True, None, False
+                self._act_subs.pop(slot.name).undeclare()
+            else:  # mid-match the seat stays, played by replacement actions; the secret stops working
+                slot.left, slot.secret, slot.alive = True, None, False
             self._cond.notify_all()
-            return {"ok": True, "match": self.id, "slot": slot.name}
+            return {"match": self.id, "slot": slot.name}
 
-    def set_alive(self, slot_name: str, lease: str, alive: bool) -> None:
+    def set_alive(self, user: str, slot_name: str, lease: str, alive: bool) -> None:
         with self._cond:
             slot = self.slots.get(slot_name)
-            if slot is not None and slot.lease is not None and slot.lease == lease and not slot.left:
+            if slot is not None and slot.user == user and slot.lease is not None and slot.lease == lease \
+                    and not slot.left:
                 slot.alive = alive
                 self._cond.notify_all()
 
@@ -192,9 +267,10 @@ class MatchRunner:
             return self._summary()
 
     def _summary(self) -> dict:
-        return {"id": self.id, "status": self.status, "mode": self.options.mode,
+        return {"id": self.id, "instance": self.instance, "status": self.status, "mode": self.options.mode,
                 "config": self.options.config if isinstance(self.options.config, str) else self.config["mode"],
-                "slots": len(self.slots), "joined": sum(s.occupant == "remote" for s in self.slots.values()),
+                "open": self.options.open, "creator": self.creator, "slots": len(self.slots),
+                "joined": sum(s.occupant == "remote" for s in self.slots.values()),
                 "decision": self.decision, "score": self.scoreboard.get("score"), "result_key": self.result_key}
 
     def inspect(self) -> dict:
@@ -213,32 +289,37 @@ class MatchRunner:
             if slot is not None and reason == "invalid_action":
                 slot.counts["invalid"] += 1
         if slot is not None and message is not None:
-            # Only the token holder learns why: the error goes to its own slot's key.
-            self.session.put(self.keys.slot(self.id, slot.name, "error"),
-                             pack({"match": self.id, "slot": slot.name, "error": message}))
+            # Only an authenticated sender learns why, on its own slot's key.
+            self.session.put(self.keys.slot(slot.user, self.id, slot.name, "error"), self._seal(
+                {"kind": "error", "slot": slot.name, "decision": self.decision, "error": message}))
 
-    def on_action(self, sample) -> None:
-        """Zenoh callback for ``.../<slot>/act``: check everything, then hand the controls to the match."""
-        payload = sample.payload
-        if len(payload) > MAX_ACTION_BYTES:
-            self._reject("oversize")
+    def on_action(self, slot: Slot, sample) -> None:
+        """Zenoh callback for a slot's ``act`` key: check everything, then hand the controls to the match."""
+        if slot.secret is None:
+            self._reject("no_player")  # the bot left the running match
             return
         try:
-            message = unpack(payload.to_bytes(), MAX_ACTION_BYTES)
+            body, mac = split_action(sample.payload.to_bytes())
         except VersionError:
             self._reject("bad_version")
             return
-        except ProtocolError:
-            self._reject("malformed")
+        except ProtocolError as e:
+            self._reject("oversize" if "over the limit" in str(e) else "malformed")
             return
-        slot = self.slots.get(self.keys.parse_action_slot(self.id, str(sample.key_expr)) or "")
-        if slot is None:
-            self._reject("unknown_slot")
+        secret = slot.secret
+        if secret is None or not same_mac(mac, action_mac(secret, body)):
+            self._reject("bad_mac")
             return
-        if not same_token(message.get("token"), slot.token):
-            self._reject("bad_token")
+        try:
+            message = unpack_map(body, len(body), "action")
+        except ProtocolError as e:
+            self._reject("invalid_action", slot, str(e))
             return
         decision = message.get("decision")
+        if message.get("match") != self.id or message.get("slot") != slot.name:
+            self._reject("invalid_action", slot, f"action: names match {message.get('match')!r} slot "
+                                                 f"{message.get('slot')!r}, not this key's")
+            return
         if isinstance(decision, bool) or not isinstance(decision, int):
             self._reject("invalid_action", slot, f"decision: expected the decision number, got {decision!r}")
             return
@@ -248,11 +329,16 @@ class MatchRunner:
             self._reject("invalid_action", slot, str(e))
             return
         with self._cond:
+            slot.heard()
             if self.options.mode == "lockstep":
                 if decision != self.decision:
                     late = decision < self.decision
                     self.rejected["late" if late else "future_decision"] += 1
                     slot.counts["late" if late else "invalid"] += 1
+                    self._cond.notify_all()
+                    return
+                if slot.pending is not None:  # one action per decision: the first one counts
+                    self.rejected["duplicate"] += 1
                     return
                 slot.pending = controls
             else:  # realtime: the newest action wins, whenever it arrives
@@ -260,6 +346,8 @@ class MatchRunner:
                     self.rejected["future_decision" if decision > self.decision else "late"] += 1
                     return
                 slot.last_controls = controls
+                if decision == slot.acted_decision:  # a newer action for the same decision: counted once
+                    return
             slot.acted_decision = decision
             slot.counts["received"] += 1
             self._cond.notify_all()
@@ -274,8 +362,8 @@ class MatchRunner:
             self._play()
             self._end("stopped" if self._stop.is_set() else "finished")
         except Exception as e:  # a bug must not take the server down: the match fails, others go on
-            log.error("match %s failed:\n%s", self.id, traceback.format_exc())
-            self.error = f"{type(e).__name__}: {e}"
+            log.error("match %s failed (%s: %s):\n%s", self.id, type(e).__name__, e, traceback.format_exc())
+            self.error = INTERNAL_ERROR  # clients learn that it failed, the log says why
             self._end("failed")
 
     def _wait_until_ready(self) -> None:
@@ -298,7 +386,8 @@ class MatchRunner:
             if slot.occupant == "fill" and self.options.fill != "idle":
                 self._fill[slot.name] = load_policy(self.options.fill)
         pubs = {"state": self.keys.state(self.id), "events": self.keys.events(self.id)}
-        pubs.update({slot: self.keys.slot(self.id, slot, "obs") for slot in self.slots})
+        pubs.update({s.name: self.keys.slot(s.user, self.id, s.name, "obs") for s in self.slots.values()
+                     if s.occupant == "remote"})
         import zenoh
         # DROP, not BLOCK: a bot whose link is congested must never stall the match thread.
         self._publishers = {name: self.session.declare_publisher(
@@ -351,7 +440,7 @@ class MatchRunner:
                         slot.last_controls = slot.pending
                         actions[slot.name] = slot.pending
                     else:
-                        slot.counts["missed" if slot.waits_for else "disconnected"] += 1
+                        slot.missed(self.missed_streak)
                         actions[slot.name] = self._replacement(slot)
                         slot.last_controls = actions[slot.name]
                     slot.pending = None
@@ -378,7 +467,7 @@ class MatchRunner:
                     if tick > 0:  # close the decision that just ended: who never answered it?
                         for slot in self.slots.values():
                             if slot.occupant == "remote" and slot.acted_decision < self.decision:
-                                slot.counts["missed" if slot.waits_for else "disconnected"] += 1
+                                slot.missed(self.missed_streak)
                         self.decision += 1
                         now = time.perf_counter()
                         self._decision_s.append(now - last_decision_t)
@@ -409,6 +498,11 @@ class MatchRunner:
         self._publish(observations, acc_rewards, self._obs.state, done=True, events=events)
 
     # ------------------------------------------------------------------------------------------ publishing
+    def _seal(self, body: dict, raw: dict[str, bytes] | None = None) -> bytes:
+        """A signed message of this match: who sends it, for which match instance, its sequence number."""
+        return seal(self.identity, {**body, "server": self.keys.server, "match": self.id, "instance": self.instance,
+                                    "seq": next(self._seq)}, raw)
+
     def _slots_public(self) -> dict:
         with self._cond:
             return {n: s.public() for n, s in self.slots.items()}
@@ -418,21 +512,21 @@ class MatchRunner:
         self.scoreboard = self.env.rules.scoreboard()
         state_bytes = pack_value(encode_state(state))
         decision = self.decision
-        common = {"match": self.id, "decision": decision, "scoreboard": self.scoreboard, "done": done}
+        common = {"decision": decision, "scoreboard": self.scoreboard, "done": done}
         summary = self.env.rules.summary() if done else None
         for name, slot in self.slots.items():
-            if slot.occupant != "remote" or slot.left:
+            if slot.occupant != "remote" or slot.left or name not in self._publishers:
                 continue
-            message = {**common, "slot": name, "reward": float(rewards.get(name, 0.0)), "events": events,
-                       "obs": observations.get(name, np.zeros(0, np.float32))}
+            message = {"kind": "obs", **common, "slot": name, "reward": float(rewards.get(name, 0.0)),
+                       "events": events, "obs": observations.get(name, np.zeros(0, np.float32))}
             if done:
                 message.update(summary=summary, reason="stopped" if self._stop.is_set() else "finished")
             raw = {"state": state_bytes} if slot.with_state else {}
-            self._put(name, pack_with_raw(message, raw), final=done)
-        self._publishers["state"].put(pack_with_raw({**common, "status": self.status, "slots": self._slots_public()},
-                                                    {"state": state_bytes}))
+            self._put(name, self._seal(message, raw), final=done)
+        self._publishers["state"].put(self._seal({"kind": "state", **common, "status": self.status,
+                                                  "slots": self._slots_public()}, {"state": state_bytes}))
         if events:
-            self._publishers["events"].put(pack({**common, "events": events}))
+            self._publishers["events"].put(self._seal({"kind": "events", **common, "events": events}))
 
     def _put(self, name: str, payload: bytes, final: bool = False) -> None:
         if not final:
@@ -474,14 +568,14 @@ class MatchRunner:
         with self._cond:
             self.status = status
         if "events" in self._publishers:
-            self._put("events", pack({"match": self.id, "decision": self.decision, "final": True, "status": status,
-                                      "summary": summary, "error": self.error, "result_key": self.result_key}),
-                      final=True)
+            self._put("events", self._seal({"kind": "events", "decision": self.decision, "done": True, "final": True,
+                                            "events": [], "status": status, "summary": summary, "error": self.error,
+                                            "result_key": self.result_key}), final=True)
         self._close_zenoh()
         self.env.close()
 
     def _close_zenoh(self) -> None:
-        for declared in [self._act_sub, *self._publishers.values()]:
+        for declared in [*self._act_subs.values(), *self._publishers.values()]:
             try:
                 declared.undeclare()
             except Exception:  # the session may already be closing

@@ -1,20 +1,28 @@
-"""The wire protocol of the match server: key expressions, msgpack payloads, the protocol version.
+"""The wire protocol of the match server: key expressions, msgpack payloads, signed and MAC'd envelopes.
 
 Every payload is one msgpack map carrying ``"v": PROTOCOL_VERSION``. A numpy array travels as the map
 ``{"$nd": <dtype string, e.g. "<f4">, "shape": [..], "data": <raw bytes, C order>}``, so any msgpack
 library can read it; only numeric and boolean dtypes are accepted. A ``GameState`` travels as a map of
 its fields (``encode_state``/``decode_state``), cars keyed by agent.
 
-Key expressions (``<server>`` names the server, ``<id>`` a match, ``<slot>`` an agent such as ``blue_0``):
+What the server sends is *sealed*: ``{"v": 2, "body": <bin: a msgpack map>, "sig": <Ed25519 signature>}``
+(``seal``/``open_sealed``; ``crypto`` says what is signed). An action is ``{"v": 2, "body": <bin: {match,
+slot, decision, action}>, "mac": <HMAC-SHA256 under the slot's secret>}`` (``action_message``).
 
-    rocketdrl/<server>/lobby                     queryable: create, list, inspect, stop, join, leave
-    rocketdrl/<server>/alive                     liveliness token of the running server
-    rocketdrl/<server>/match/<id>/state          each decision: the game state, scoreboard and slots
-    rocketdrl/<server>/match/<id>/events         each decision with events; the end-of-match summary
-    rocketdrl/<server>/match/<id>/<slot>/obs     server -> bot: observation, reward, info, state
-    rocketdrl/<server>/match/<id>/<slot>/act     bot -> server: token, decision number, action
-    rocketdrl/<server>/match/<id>/<slot>/error   server -> bot: why an action was refused
-    rocketdrl/<server>/match/<id>/<slot>/alive/<lease>   liveliness token of the bot holding the slot
+Key expressions (``<server>`` names the server, ``<user>`` the client's user, ``<id>`` a match, ``<slot>``
+an agent such as ``blue_0``). Per-slot traffic lives under its player's prefix ``u/<user>``: with Zenoh
+access control on, only that user (and the server) may use it, so the key says who sent a message.
+
+    rocketdrl/<server>/key                                   queryable: the server's public key (signed)
+    rocketdrl/<server>/alive                                 liveliness token of the running server
+    rocketdrl/<server>/u/<user>/lobby                        queryable: every lobby op, asked by <user>
+    rocketdrl/<server>/u/<user>/invite                       queryable of a league entrant's bot
+    rocketdrl/<server>/u/<user>/match/<id>/<slot>/obs        server -> bot: observation, reward, state
+    rocketdrl/<server>/u/<user>/match/<id>/<slot>/act        bot -> server: decision number, action, MAC
+    rocketdrl/<server>/u/<user>/match/<id>/<slot>/error      server -> bot: why an action was refused
+    rocketdrl/<server>/u/<user>/match/<id>/<slot>/alive/<lease>   liveliness token of the bot
+    rocketdrl/<server>/match/<id>/state                      each decision: the game state, scoreboard, slots
+    rocketdrl/<server>/match/<id>/events                     decisions with events; the end-of-match message
 """
 from __future__ import annotations
 
@@ -30,11 +38,14 @@ from rocketdrl_ma.physics import PRESETS, BallState, CarConfig, CarControls, Car
 from rocketdrl_ma.physics.car_config import WheelPair
 from rocketdrl_ma.rules.state import GameState, Obstacle
 
-PROTOCOL_VERSION = 1
+from .crypto import MAC_BYTES, ServerIdentity, ServerKey, action_mac
+
+PROTOCOL_VERSION = 2
 #: the largest action message the server decodes; anything bigger is dropped unread
 MAX_ACTION_BYTES = 64 * 1024
-#: the largest lobby request (create carries a config)
+#: the largest lobby request, and what Zenoh itself reassembles (``transport/link/rx/max_message_size``)
 MAX_REQUEST_BYTES = 1024 * 1024
+MAX_MESSAGE_BYTES = MAX_REQUEST_BYTES + 64 * 1024
 _NAME = re.compile(r"^[A-Za-z0-9_\-]{1,64}$")
 _ND_KINDS = "biuf"  # bool, signed, unsigned, float: never objects, strings or void
 _CAR_FIELDS = tuple(f.name for f in dataclasses.fields(CarState))
@@ -50,7 +61,7 @@ class VersionError(ProtocolError):
 
 
 def check_name(field: str, value: Any) -> str:
-    """Server names, match ids and slots become key-expression chunks: letters, digits, ``_`` and ``-``."""
+    """Server names, users, match ids and slots become key-expression chunks: letters, digits, ``_``, ``-``."""
     if not isinstance(value, str) or not _NAME.match(value):
         raise ValueError(f"{field}: expected 1-64 letters, digits, '_' or '-', got {value!r}")
     return value
@@ -62,9 +73,19 @@ class Keys:
     def __init__(self, server: str):
         self.server = check_name("server", server)
         self.root = f"rocketdrl/{server}"
-        self.lobby = f"{self.root}/lobby"
+        self.key = f"{self.root}/key"
         self.server_alive = f"{self.root}/alive"
-        self.all_bot_alive = f"{self.root}/match/*/*/alive/*"
+        self.all_lobbies = f"{self.root}/u/*/lobby"
+        self.all_bot_alive = f"{self.root}/u/*/match/*/*/alive/*"
+
+    def user(self, user: str) -> str:
+        return f"{self.root}/u/{user}"
+
+    def lobby(self, user: str) -> str:
+        return f"{self.user(user)}/lobby"
+
+    def invite(self, user: str) -> str:
+        return f"{self.user(user)}/invite"
 
     def match(self, match_id: str) -> str:
         return f"{self.root}/match/{match_id}"
@@ -75,27 +96,29 @@ class Keys:
     def events(self, match_id: str) -> str:
         return f"{self.match(match_id)}/events"
 
-    def slot(self, match_id: str, slot: str, leaf: str) -> str:
-        return f"{self.match(match_id)}/{slot}/{leaf}"
+    def slot(self, user: str, match_id: str, slot: str, leaf: str) -> str:
+        return f"{self.user(user)}/match/{match_id}/{slot}/{leaf}"
 
-    def all_actions(self, match_id: str) -> str:
-        return f"{self.match(match_id)}/*/act"
+    def bot_alive(self, user: str, match_id: str, slot: str, lease: str) -> str:
+        return self.slot(user, match_id, slot, f"alive/{lease}")
 
-    def bot_alive(self, match_id: str, slot: str, lease: str) -> str:
-        return f"{self.match(match_id)}/{slot}/alive/{lease}"
-
-    def parse_bot_alive(self, key: str) -> tuple[str, str, str] | None:
-        """``(match_id, slot, lease)`` of a bot liveliness key, None for any other key."""
+    def _user_parts(self, key: str) -> list[str] | None:
         parts = key.split("/")
-        if len(parts) != 7 or "/".join(parts[:2]) != self.root or parts[2] != "match" or parts[5] != "alive":
+        if len(parts) < 4 or "/".join(parts[:2]) != self.root or parts[2] != "u":
             return None
-        return parts[3], parts[4], parts[6]
+        return parts[3:]
 
-    def parse_action_slot(self, match_id: str, key: str) -> str | None:
-        prefix = self.match(match_id) + "/"
-        if not key.startswith(prefix) or not key.endswith("/act"):
+    def parse_lobby_user(self, key: str) -> str | None:
+        """The user of a lobby key, None for any other key."""
+        parts = self._user_parts(key)
+        return parts[0] if parts is not None and len(parts) == 2 and parts[1] == "lobby" else None
+
+    def parse_bot_alive(self, key: str) -> tuple[str, str, str, str] | None:
+        """``(user, match_id, slot, lease)`` of a bot liveliness key, None for any other key."""
+        parts = self._user_parts(key)
+        if parts is None or len(parts) != 6 or parts[1] != "match" or parts[4] != "alive":
             return None
-        return key[len(prefix):-len("/act")]
+        return parts[0], parts[2], parts[3], parts[5]
 
 
 # ---------------------------------------------------------------------------------------------- msgpack
@@ -133,46 +156,83 @@ def _object_hook(d: dict) -> Any:
 
 
 def pack_value(value: Any) -> bytes:
-    """Any value as msgpack bytes (no version: for ``pack_with_raw``'s pre-packed parts)."""
+    """Any value as msgpack bytes (e.g. a game state encoded once and put into several bodies)."""
     return msgpack.packb(value, default=_default, use_bin_type=True)
 
 
-def pack(message: dict) -> bytes:
-    """One message as msgpack bytes, with the protocol version added."""
-    return msgpack.packb({"v": PROTOCOL_VERSION, **message}, default=_default, use_bin_type=True)
-
-
-def pack_with_raw(message: dict, raw: dict[str, bytes]) -> bytes:
-    """``pack`` with some values already packed (``raw``: key -> msgpack bytes), e.g. one game state sent
-    to several bots is encoded once. The result is an ordinary msgpack map."""
-    n = len(message) + len(raw) + 1
-    if n > 15:
-        raise ValueError(f"message: {n} entries; pack_with_raw builds fixmaps of at most 15")
-    parts = [bytes([0x80 | n]), msgpack.packb("v"), msgpack.packb(PROTOCOL_VERSION)]
+def pack_map(message: dict, raw: dict[str, bytes] | None = None) -> bytes:
+    """A msgpack map of ``message`` plus values already packed (``raw``: key -> msgpack bytes). The result
+    is an ordinary msgpack map."""
+    raw = raw or {}
+    n = len(message) + len(raw)
+    parts = [bytes([0x80 | n]) if n <= 15 else b"\xde" + n.to_bytes(2, "big")]
     for key, value in message.items():
-        parts += [msgpack.packb(key), msgpack.packb(value, default=_default, use_bin_type=True)]
+        parts += [msgpack.packb(key), pack_value(value)]
     for key, value in raw.items():
         parts += [msgpack.packb(key), value]
     return b"".join(parts)
 
 
-def unpack(payload: bytes, max_bytes: int = MAX_REQUEST_BYTES) -> dict:
-    """Decode and check one message: its size, that it is a map, and its protocol version."""
+def pack(message: dict) -> bytes:
+    """One message as msgpack bytes, with the protocol version added."""
+    return pack_value({"v": PROTOCOL_VERSION, **message})
+
+
+def unpack_map(payload: bytes, max_bytes: int, what: str = "message") -> dict:
+    """Decode a msgpack map (arrays included), checking its size first."""
     if len(payload) > max_bytes:
-        raise ProtocolError(f"message: {len(payload)} bytes is over the limit of {max_bytes}")
+        raise ProtocolError(f"{what}: {len(payload)} bytes is over the limit of {max_bytes}")
     try:
         message = msgpack.unpackb(payload, raw=False, object_hook=_object_hook, strict_map_key=False)
     except ProtocolError:
         raise
     except Exception as e:  # msgpack raises several unrelated types for garbage
-        raise ProtocolError(f"message: not valid msgpack ({type(e).__name__}: {e})") from None
+        raise ProtocolError(f"{what}: not valid msgpack ({type(e).__name__}: {e})") from None
     if not isinstance(message, dict):
-        raise ProtocolError(f"message: expected a map, got {type(message).__name__}")
+        raise ProtocolError(f"{what}: expected a map, got {type(message).__name__}")
+    return message
+
+
+def unpack(payload: bytes, max_bytes: int = MAX_REQUEST_BYTES) -> dict:
+    """Decode and check one message: its size, that it is a map, and its protocol version."""
+    message = unpack_map(payload, max_bytes)
     version = message.get("v")
     if version != PROTOCOL_VERSION:
         raise VersionError(f"v: protocol version {version!r} is not supported; this server speaks version "
                             f"{PROTOCOL_VERSION}")
     return message
+
+
+# ---------------------------------------------------------------------------------------------- envelopes
+def seal(identity: ServerIdentity, body: dict, raw: dict[str, bytes] | None = None) -> bytes:
+    """A server message: the body (a msgpack map, some values possibly pre-packed) and its signature."""
+    packed = pack_map(body, raw)
+    return pack({"body": packed, "sig": identity.sign(packed)})
+
+
+def open_sealed(key: ServerKey, payload: bytes, max_bytes: int) -> dict:
+    """The body of a server message, once its signature is checked (``SignatureError`` otherwise)."""
+    message = unpack(payload, max_bytes)
+    body, signature = message.get("body"), message.get("sig")
+    if not isinstance(body, bytes) or not isinstance(signature, bytes):
+        raise ProtocolError("message: a server message is {v, body: bin, sig: bin}")
+    key.verify(body, signature)
+    return unpack_map(body, max_bytes, "body")
+
+
+def action_message(secret: bytes, match_id: str, slot: str, decision: int, action: Any) -> bytes:
+    """What a bot publishes on its ``act`` key for ``decision``."""
+    body = pack_value({"match": match_id, "slot": slot, "decision": decision, "action": action})
+    return pack({"body": body, "mac": action_mac(secret, body)})
+
+
+def split_action(payload: bytes) -> tuple[bytes, bytes]:
+    """``(body, mac)`` of an action message (size and version checked; the MAC is not)."""
+    message = unpack(payload, MAX_ACTION_BYTES)
+    body, mac = message.get("body"), message.get("mac")
+    if not isinstance(body, bytes) or not isinstance(mac, bytes) or len(mac) != MAC_BYTES:
+        raise ProtocolError("action: expected {v, body: bin, mac: 32-byte bin}")
+    return body, mac
 
 
 # ---------------------------------------------------------------------------------------------- game state

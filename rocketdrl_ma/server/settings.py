@@ -1,4 +1,4 @@
-"""Server, Zenoh and match settings: YAML in, validated dataclasses out (errors name the key).
+"""Server, client, Zenoh and match settings: YAML in, validated dataclasses out (errors name the key).
 
 A server YAML (``server/local.yaml``)::
 
@@ -7,27 +7,39 @@ A server YAML (``server/local.yaml``)::
       mode: peer
       listen: [tcp/127.0.0.1:7447]
     results: runs/server/results.sqlite
-    admin_token: null               # if set, create and stop must carry it
+    key_dir: runs/server/local      # the server's Ed25519 key and admin secret (created on first start)
+    access: {...}                   # Zenoh users and their roles; see AccessSettings (absent: no authentication)
+    limits: {...}                   # quotas and bounds on what the lobby accepts; see Limits
     match_defaults: {mode: lockstep, deadline_ms: 50, ...}   # see MatchOptions
     matches: []                     # matches to create at start: MatchOptions keys plus ``id``
+
+A client YAML (``server/client.yaml``, or one written per user by ``rocketdrl-ma keys``): see ClientSettings.
 """
 from __future__ import annotations
 
+import fnmatch
 import ipaddress
 import json
 import math
+import os
+import re
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from .protocol import check_name
+from .protocol import MAX_MESSAGE_BYTES, check_name
 
 ZENOH_MODES = ("peer", "client", "router")
 MATCH_MODES = ("lockstep", "realtime")
 REPLACEMENTS = ("repeat", "neutral")
+ROLES = ("admin", "player", "spectator")
+SERVER_USER = "server"  # the match server's own Zenoh user when it is a client of a router
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+DEFAULT_USER = "guest"  # a client without Zenoh authentication (loopback): just a name, proves nothing
+_SECURE_PROTOCOLS = ("tls", "quic")
+_CONFIG_NAME = re.compile(r"^([A-Za-z0-9_\-]+)/([A-Za-z0-9_\-]+)\.ya?ml$")
 
 
 def _unknown(section: str, given: dict, allowed) -> None:
@@ -36,12 +48,20 @@ def _unknown(section: str, given: dict, allowed) -> None:
         raise ValueError(f"{section}: unknown key(s) {unknown}; allowed: {sorted(allowed)}")
 
 
+def _mapping(section: str, value: Any) -> dict:
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ValueError(f"{section}: expected a mapping, got {value!r}")
+    return dict(value)
+
+
 def _endpoint_host(endpoint: str) -> str:
     """``tcp/127.0.0.1:7447`` -> ``127.0.0.1``; ``tcp/[::1]:7447`` -> ``::1``."""
     _, sep, address = endpoint.partition("/")
     if not sep:
-        raise ValueError(f"zenoh.listen: {endpoint!r} is not a Zenoh endpoint like {DEFAULT_ENDPOINT!r}")
-    address = address.split("#", 1)[0]
+        raise ValueError(f"zenoh: {endpoint!r} is not a Zenoh endpoint like {DEFAULT_ENDPOINT!r}")
+    address = address.split("#", 1)[0].split("?", 1)[0]
     host = address.rsplit(":", 1)[0]
     return host[1:-1] if host.startswith("[") and host.endswith("]") else host
 
@@ -56,23 +76,43 @@ def is_loopback_endpoint(endpoint: str) -> bool:
         return False
 
 
+def is_wildcard_endpoint(endpoint: str) -> bool:
+    """Listening on every interface (0.0.0.0 or ::) unless the endpoint names one (``#iface=eth0``)."""
+    if "iface=" in endpoint:
+        return False
+    try:
+        return ipaddress.ip_address(_endpoint_host(endpoint)).is_unspecified
+    except ValueError:
+        return False
+
+
+def is_encrypted_endpoint(endpoint: str) -> bool:
+    return endpoint.split("/", 1)[0] in _SECURE_PROTOCOLS
+
+
 @dataclass(frozen=True)
 class ZenohSettings:
     """How a process joins the Zenoh network.
 
-    ``mode``: peer (the embedded default: nothing else to run on one machine), client (through routers
-    listed in ``connect``) or router. ``listen`` defaults to loopback for peers and routers; clients
-    listen on nothing. Any non-loopback listen endpoint, and multicast scouting (which binds a UDP socket
-    on every interface), need ``allow_remote: true``. ``tls`` and ``auth`` pass through to Zenoh's
-    ``transport/link/tls/*`` and ``transport/auth/usrpwd/*`` keys (e.g. ``root_ca_certificate``,
-    ``listen_private_key``, ``listen_certificate``; ``user``, ``password``, ``dictionary_file``);
-    ``options`` sets any other Zenoh config key by its path.
+    ``mode``: peer (the embedded default: nothing else to run on one machine), client (through the
+    server or routers listed in ``connect``) or router. ``listen`` defaults to loopback for peers and
+    routers; clients listen on nothing. Secure by default: a non-loopback endpoint (listen or connect)
+    must be TLS (``tls/`` or ``quic/``) unless ``insecure: true``; listening beyond loopback also needs
+    ``allow_remote: true`` and a named address (never 0.0.0.0 or ``::`` unless ``any_interface: true``);
+    multicast scouting needs ``allow_remote``. ``tls`` and ``auth`` pass through to Zenoh's
+    ``transport/link/tls/*`` and ``transport/auth/usrpwd/*`` keys (``root_ca_certificate``,
+    ``listen_certificate``, ``listen_private_key``, their ``*_base64`` forms; ``user``, ``password``,
+    ``dictionary_file``); ``options`` sets any other Zenoh config key by its path. Gossip scouting and
+    shared memory are off and Zenoh reassembles at most ``MAX_MESSAGE_BYTES`` per message, unless
+    ``options`` says otherwise.
     """
     mode: str = "peer"
     listen: tuple[str, ...] | None = None
     connect: tuple[str, ...] = ()
     multicast: bool = False
     allow_remote: bool = False
+    any_interface: bool = False
+    insecure: bool = False
     tls: dict = field(default_factory=dict)
     auth: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)
@@ -90,6 +130,9 @@ class ZenohSettings:
         for key in ("tls", "auth", "options"):
             if not isinstance(d.get(key, {}), dict):
                 raise ValueError(f"zenoh.{key}: expected a mapping, got {d[key]!r}")
+        for key in ("multicast", "allow_remote", "any_interface", "insecure"):
+            if not isinstance(d.get(key, False), bool):
+                raise ValueError(f"zenoh.{key}: expected true or false, got {d[key]!r}")
         settings = cls(**d)
         settings.check()
         return settings
@@ -98,21 +141,34 @@ class ZenohSettings:
         if self.mode not in ZENOH_MODES:
             raise ValueError(f"zenoh.mode: {self.mode!r} is not one of {list(ZENOH_MODES)}")
         if self.mode == "client" and not self.connect:
-            raise ValueError("zenoh.connect: client mode needs at least one router endpoint to connect to")
-        if self.allow_remote:
-            return
+            raise ValueError("zenoh.connect: client mode needs at least one endpoint to connect to")
         remote = [e for e in self.listen_endpoints() if not is_loopback_endpoint(e)]
-        if remote:
+        if remote and not self.allow_remote:
             raise ValueError(f"zenoh.listen: {remote} is not loopback; set zenoh.allow_remote: true to listen on "
                              "other interfaces")
-        if self.multicast:
+        if self.multicast and not self.allow_remote:
             raise ValueError("zenoh.multicast: multicast scouting binds every interface; it needs "
                              "zenoh.allow_remote: true")
+        wildcard = [e for e in remote if is_wildcard_endpoint(e)]
+        if wildcard and not self.any_interface:
+            raise ValueError(f"zenoh.listen: {wildcard} listens on every interface; name this machine's address "
+                             "on the bots' network (e.g. tls/192.0.2.10:7447) or an interface "
+                             "(tls/0.0.0.0:7447#iface=eth0), or set zenoh.any_interface: true")
+        if self.insecure:
+            return
+        plain = [e for e in (*remote, *self.connect) if not is_loopback_endpoint(e) and not is_encrypted_endpoint(e)]
+        if plain:
+            raise ValueError(f"zenoh: {plain} would carry plaintext beyond this machine; use tls/HOST:PORT with "
+                             "zenoh.tls certificates (`rocketdrl-ma keys` makes them), or set zenoh.insecure: true "
+                             "on a network you trust")
 
     def listen_endpoints(self) -> tuple[str, ...]:
         if self.listen is not None:
             return self.listen
         return () if self.mode == "client" else (DEFAULT_ENDPOINT,)
+
+    def remote_listen(self) -> list[str]:
+        return [e for e in self.listen_endpoints() if not is_loopback_endpoint(e)]
 
     def with_overrides(self, listen: list[str] | None = None, connect: list[str] | None = None,
                        mode: str | None = None) -> "ZenohSettings":
@@ -122,19 +178,23 @@ class ZenohSettings:
         changed.check()
         return changed
 
-    def zenoh_config(self):
-        """The ``zenoh.Config`` these settings describe."""
+    def zenoh_config(self, extra: dict[str, Any] | None = None):
+        """The ``zenoh.Config`` these settings describe; ``extra`` adds config paths (e.g. the server's ACL)."""
         import zenoh
 
         config = zenoh.Config()
         entries: list[tuple[str, Any]] = [
             ("mode", self.mode),
             ("scouting/multicast/enabled", self.multicast),
+            ("scouting/gossip/enabled", False),
+            ("transport/shared_memory/enabled", False),
+            ("transport/link/rx/max_message_size", MAX_MESSAGE_BYTES),
             ("listen/endpoints", list(self.listen_endpoints())),
             ("connect/endpoints", list(self.connect)),
         ]
         entries += [(f"transport/link/tls/{k}", v) for k, v in self.tls.items()]
         entries += [(f"transport/auth/usrpwd/{k}", v) for k, v in self.auth.items()]
+        entries += list((extra or {}).items())
         entries += list(self.options.items())
         for path, value in entries:
             try:
@@ -143,27 +203,172 @@ class ZenohSettings:
                 raise ValueError(f"zenoh: cannot set {path!r} to {value!r} ({e})") from None
         return config
 
-    def open(self):
-        """A Zenoh session; a client that reaches no router is a ValueError naming the endpoints."""
+    def open(self, extra: dict[str, Any] | None = None):
+        """A Zenoh session; a client that reaches nobody is a ValueError naming the endpoints."""
         import zenoh
         try:
-            return zenoh.open(self.zenoh_config())
+            return zenoh.open(self.zenoh_config(extra))
         except zenoh.ZError as e:
             raise ValueError(f"zenoh: cannot open a {self.mode} session (connect {list(self.connect)}, "
                              f"listen {list(self.listen_endpoints())}): {e}") from None
 
 
 @dataclass(frozen=True)
+class AccessSettings:
+    """Who may connect, and what each user may do.
+
+    ``users_file``: Zenoh's user/password dictionary (``user:password`` lines; ``rocketdrl-ma keys`` writes
+    it with random passwords). With it, Zenoh authenticates every connection and the server generates
+    Zenoh access-control rules (default deny) from ``roles``: each user may use only its own key prefix
+    ``rocketdrl/<server>/u/<user>/**`` (its lobby, its slots), read the public state and events, and
+    fetch the server's key; ``admin`` users may also invite league entrants. ``roles``: user -> ``admin``
+    (create and stop matches, with the admin secret as well), ``player`` (join matches) or ``spectator``
+    (watch). ``create``: the role that may create matches (``admin``, or ``player`` to let players create
+    their own, within the per-user limit). The user ``server`` is the server itself (router set-up).
+    Without ``users_file`` nobody is authenticated: every client is a ``player`` by the name it claims
+    (fit for loopback only; admin ops still need the admin secret).
+    """
+    users_file: str | None = None
+    roles: dict = field(default_factory=dict)
+    create: str = "admin"
+
+    @classmethod
+    def from_dict(cls, d: Any) -> "AccessSettings":
+        d = _mapping("access", d)
+        _unknown("access", d, [f.name for f in fields(cls)])
+        if d.get("users_file") is not None and not isinstance(d["users_file"], str):
+            raise ValueError(f"access.users_file: expected a file path, got {d['users_file']!r}")
+        roles = _mapping("access.roles", d.get("roles"))
+        for user, role in roles.items():
+            check_name("access.roles user", user)
+            if user == SERVER_USER:
+                raise ValueError(f"access.roles: {SERVER_USER!r} is the match server's own user; give it no role")
+            if role not in ROLES:
+                raise ValueError(f"access.roles.{user}: {role!r} is not one of {list(ROLES)}")
+        if d.get("create", "admin") not in ("admin", "player"):
+            raise ValueError(f"access.create: {d['create']!r} is not one of ['admin', 'player']")
+        if roles and d.get("users_file") is None:
+            raise ValueError("access.users_file: roles need authenticated users: name the user:password file "
+                             "(`rocketdrl-ma keys` writes it)")
+        d["roles"] = roles
+        return cls(**d)
+
+    @property
+    def enabled(self) -> bool:
+        return self.users_file is not None
+
+    def role(self, user: str) -> str | None:
+        """The user's role; without authentication everyone is a player."""
+        return self.roles.get(user) if self.enabled else "player"
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Quotas and bounds on what lobby clients may ask for (matches listed in the server YAML are trusted).
+
+    ``max_matches`` waiting or running at once, ``max_matches_per_user`` of them created by one user;
+    game clock, overtime (never unlimited), kickoff countdown and minigame time (``rounds`` x
+    ``timeout_s``) bounds; ``deadline_ms`` and ``ready_timeout_s`` ranges; ``configs``: the folders a
+    match config may be named from (``matches/2v2.yaml``); ``overrides``: the config keys a lobby request
+    may change; ``fill``: the policy specs that may play empty slots (shell-style patterns);
+    ``missed_streak``: that many missed decisions in a row count as a disconnect (the match stops waiting
+    for the slot until its next action; 0: never); ``requests_per_s``/``request_burst``: lobby requests
+    per user, ten times that in all (0: no limit).
+    """
+    max_matches: int = 16
+    max_matches_per_user: int = 4
+    max_clock_s: float = 900.0
+    max_overtime_limit_s: float = 300.0
+    max_kickoff_countdown_s: float = 10.0
+    max_minigame_s: float = 900.0
+    min_deadline_ms: float = 1.0
+    max_deadline_ms: float = 2000.0
+    max_ready_timeout_s: float = 3600.0
+    missed_streak: int = 10
+    configs: tuple[str, ...] = ("matches", "minigames")
+    overrides: tuple[str, ...] = ("clock_s", "overtime_limit_s", "kickoff_countdown_s", "boost_pads", "demos",
+                                  "car_preset", "max_cycles", "observation", "action", "rounds", "timeout_s",
+                                  "difficulty")
+    fill: tuple[str, ...] = ("idle", "scripted:*")
+    requests_per_s: float = 50.0
+    request_burst: int = 100
+
+    @classmethod
+    def from_dict(cls, d: Any) -> "Limits":
+        d = _mapping("limits", d)
+        _unknown("limits", d, [f.name for f in fields(cls)])
+        for f in fields(cls):
+            if f.name not in d:
+                continue
+            value = d[f.name]
+            if isinstance(f.default, tuple):
+                if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+                    raise ValueError(f"limits.{f.name}: expected a list of names, got {value!r}")
+                d[f.name] = tuple(value)
+            elif isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                    or value < 0 or (isinstance(f.default, int) and not isinstance(value, int)):
+                kind = "an integer" if isinstance(f.default, int) else "a finite number"
+                raise ValueError(f"limits.{f.name}: expected {kind} >= 0, got {value!r}")
+        limits = cls(**d)
+        if limits.min_deadline_ms > limits.max_deadline_ms:
+            raise ValueError("limits.min_deadline_ms: larger than limits.max_deadline_ms")
+        return limits
+
+    def check_config_name(self, config: Any) -> str:
+        """A lobby ``config``: a name like ``matches/2v2.yaml`` from an allowed folder, nothing else."""
+        m = _CONFIG_NAME.match(config) if isinstance(config, str) else None
+        if m is None or m.group(1) not in self.configs:
+            raise ValueError(f"config: expected a config name like 'matches/2v2.yaml' from the server's folders "
+                             f"{list(self.configs)}, got {config!r}")
+        return config
+
+    def check_options(self, options: "MatchOptions") -> None:
+        if not self.min_deadline_ms <= options.deadline_ms <= self.max_deadline_ms:
+            raise ValueError(f"deadline_ms: {options.deadline_ms!r} is outside this server's range "
+                             f"[{self.min_deadline_ms}, {self.max_deadline_ms}]")
+        if options.ready_timeout_s > self.max_ready_timeout_s:
+            raise ValueError(f"ready_timeout_s: {options.ready_timeout_s!r} is over this server's limit of "
+                             f"{self.max_ready_timeout_s}")
+        if not any(fnmatch.fnmatchcase(options.fill, pattern) for pattern in self.fill):
+            raise ValueError(f"fill: {options.fill!r} is not allowed on this server; allowed: {list(self.fill)}")
+        not_allowed = sorted(set(options.overrides) - set(self.overrides))
+        if not_allowed:
+            raise ValueError(f"overrides: {not_allowed} may not be changed on this server; allowed: "
+                             f"{sorted(self.overrides)}")
+
+    def check_game(self, config: dict) -> None:
+        """Bounds on the resolved game config (after overrides)."""
+        def bounded(key: str, limit: float, none_ok: bool = False) -> None:
+            if key not in config:
+                return
+            value = config[key]
+            if value is None and not none_ok:
+                raise ValueError(f"{key}: must be set on this server (at most {limit})")
+            if value is not None and not 0 <= value <= limit:
+                raise ValueError(f"{key}: {value!r} is outside this server's range [0, {limit}]")
+        bounded("clock_s", self.max_clock_s)
+        bounded("overtime_limit_s", self.max_overtime_limit_s)
+        bounded("kickoff_countdown_s", self.max_kickoff_countdown_s)
+        if "timeout_s" in config:
+            total = config["timeout_s"] * config.get("rounds", 1)
+            if not 0 <= total <= self.max_minigame_s:
+                raise ValueError(f"timeout_s: rounds x timeout_s = {total!r} s is over this server's limit of "
+                                 f"{self.max_minigame_s}")
+
+
+@dataclass(frozen=True)
 class MatchOptions:
     """How one match is played.
 
-    ``config``: a game config path (``matches/2v2.yaml``, ``minigames/penalty.yaml``) or mapping;
-    ``overrides``: config keys replaced for this match (``clock_s``, ``kickoff_countdown_s``...).
+    ``config``: a game config (``matches/2v2.yaml``, ``minigames/penalty.yaml``; the server YAML may also
+    give a mapping); ``overrides``: config keys replaced for this match (``clock_s``, ``kickoff_countdown_s``...).
     ``mode``: lockstep (every decision waits for every connected bot up to ``deadline_ms``) or realtime
     (120 Hz wall clock, the latest action of each bot applies). ``replacement``: what a late, missing or
     refused action becomes: ``repeat`` (the slot's last action) or ``neutral``. ``ready_timeout_s``: the
     match starts when every slot holds a connected bot, or this long after it was created; ``fill``
-    plays the empty slots then: a policy spec (``scripted:ball_chaser``) or ``idle``.
+    plays the empty slots then: a policy spec (``scripted:ball_chaser``) or ``idle``. ``open``: any
+    player may join an empty slot; otherwise a slot needs its ticket (handed out by the match's creator)
+    or a seat: ``seats`` maps slots to the user who alone may join them.
     """
     config: str | dict = "matches/1v1.yaml"
     overrides: dict = field(default_factory=dict)
@@ -173,6 +378,8 @@ class MatchOptions:
     ready_timeout_s: float = 30.0
     fill: str = "scripted:ball_chaser"
     seed: int | None = None
+    open: bool = False
+    seats: dict = field(default_factory=dict)
 
     @classmethod
     def from_dict(cls, d: dict, base: "MatchOptions | None" = None) -> "MatchOptions":
@@ -185,7 +392,7 @@ class MatchOptions:
 
     def check(self) -> None:
         if not isinstance(self.config, (str, dict)):
-            raise ValueError(f"config: expected a config path or mapping, got {self.config!r}")
+            raise ValueError(f"config: expected a config name or mapping, got {self.config!r}")
         if not isinstance(self.overrides, dict):
             raise ValueError(f"overrides: expected a mapping of config keys, got {self.overrides!r}")
         if self.mode not in MATCH_MODES:
@@ -201,6 +408,13 @@ class MatchOptions:
             raise ValueError(f"fill: expected 'idle' or a policy spec like 'scripted:ball_chaser', got {self.fill!r}")
         if self.seed is not None and (isinstance(self.seed, bool) or not isinstance(self.seed, int)):
             raise ValueError(f"seed: expected an int or null, got {self.seed!r}")
+        if not isinstance(self.open, bool):
+            raise ValueError(f"open: expected true or false, got {self.open!r}")
+        if not isinstance(self.seats, dict):
+            raise ValueError(f"seats: expected a mapping of slot to user, got {self.seats!r}")
+        for slot, user in self.seats.items():
+            check_name("seats slot", slot)
+            check_name(f"seats.{slot}", user)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -211,7 +425,9 @@ class ServerSettings:
     name: str = "local"
     zenoh: ZenohSettings = field(default_factory=ZenohSettings)
     results: str = "runs/server/results.sqlite"
-    admin_token: str | None = None
+    key_dir: str | None = None
+    access: AccessSettings = field(default_factory=AccessSettings)
+    limits: Limits = field(default_factory=Limits)
     match_defaults: MatchOptions = field(default_factory=MatchOptions)
     matches: tuple[dict, ...] = ()
     max_finished_kept: int = 100
@@ -223,40 +439,139 @@ class ServerSettings:
         check_name("name", d.get("name", cls.name))
         if "zenoh" in d and not isinstance(d["zenoh"], ZenohSettings):
             d["zenoh"] = ZenohSettings.from_dict(d["zenoh"])
+        if "access" in d and not isinstance(d["access"], AccessSettings):
+            d["access"] = AccessSettings.from_dict(d["access"])
+        if "limits" in d and not isinstance(d["limits"], Limits):
+            d["limits"] = Limits.from_dict(d["limits"])
         if "match_defaults" in d and not isinstance(d["match_defaults"], MatchOptions):
             d["match_defaults"] = MatchOptions.from_dict(d["match_defaults"] or {})
         matches = d.get("matches") or []
-        if not isinstance(matches, list):
+        if not isinstance(matches, (list, tuple)):
             raise ValueError(f"matches: expected a list of match options, got {matches!r}")
         for i, m in enumerate(matches):
             if not isinstance(m, dict):
                 raise ValueError(f"matches[{i}]: expected a mapping, got {m!r}")
             MatchOptions.from_dict({k: v for k, v in m.items() if k != "id"}, d.get("match_defaults"))
         d["matches"] = tuple(matches)
-        if not isinstance(d.get("results", cls.results), str):
-            raise ValueError(f"results: expected a file path, got {d['results']!r}")
-        token = d.get("admin_token")
-        if token is not None and (not isinstance(token, str) or not token):
-            raise ValueError("admin_token: expected a non-empty string or null")
-        return cls(**d)
+        for key in ("results", "key_dir"):
+            if d.get(key) is not None and not isinstance(d[key], str):
+                raise ValueError(f"{key}: expected a path, got {d[key]!r}")
+        settings = cls(**d)
+        settings.check()
+        return settings
+
+    def check(self) -> None:
+        zenoh = self.zenoh
+        if zenoh.remote_listen() and not self.access.enabled and not zenoh.insecure:
+            raise ValueError(f"access.users_file: the server listens beyond loopback ({zenoh.remote_listen()}) "
+                             "but authenticates nobody; add users (`rocketdrl-ma keys` writes them) or set "
+                             "zenoh.insecure: true on a network you trust")
+
+    @property
+    def keys_path(self) -> Path:
+        return Path(self.key_dir if self.key_dir is not None else f"runs/server/{self.name}")
 
     @classmethod
     def load(cls, path: str | Path) -> "ServerSettings":
-        p = Path(path)
-        if not p.is_file():
-            raise ValueError(f"server config: no such file {str(path)!r}")
-        raw = yaml.safe_load(p.read_text()) or {}
-        if not isinstance(raw, dict):
-            raise ValueError(f"server config: {path} must hold a mapping")
-        return cls.from_dict(raw)
+        return cls.from_dict(_load_yaml(path, "server config"))
+
+
+def _load_yaml(path: str | Path, what: str) -> dict:
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"{what}: no such file {str(path)!r}")
+    raw = yaml.safe_load(p.read_text()) or {}
+    if not isinstance(raw, dict):
+        raise ValueError(f"{what}: {path} must hold a mapping")
+    return raw
 
 
 def load_zenoh_settings(path: str | Path) -> ZenohSettings:
-    """The ``zenoh:`` section of a YAML file (a server or client config)."""
-    p = Path(path)
-    if not p.is_file():
-        raise ValueError(f"config: no such file {str(path)!r}")
-    raw = yaml.safe_load(p.read_text()) or {}
-    if not isinstance(raw, dict) or "zenoh" not in raw:
+    """The ``zenoh:`` section of a YAML file (a server, router or client config)."""
+    raw = _load_yaml(path, "config")
+    if "zenoh" not in raw:
         raise ValueError(f"config: {path} has no 'zenoh' section")
     return ZenohSettings.from_dict(raw["zenoh"])
+
+
+def known_servers_path() -> Path:
+    """Where clients remember the keys of servers they trusted on first use (like ssh's known_hosts)."""
+    if os.environ.get("ROCKETDRL_MA_KNOWN_SERVERS"):
+        return Path(os.environ["ROCKETDRL_MA_KNOWN_SERVERS"])
+    base = os.environ.get("XDG_CONFIG_HOME") or os.path.join(os.path.expanduser("~"), ".config")
+    return Path(base) / "rocketdrl-ma" / "known_servers"
+
+
+@dataclass(frozen=True)
+class ClientSettings:
+    """How a bot, spectator or lobby client reaches a server and knows it is the real one.
+
+    ``server``: the server's name. ``zenoh``: a client session (default: loopback ``tcp/127.0.0.1:7447``).
+    ``user``: the client's user in key expressions (default: ``zenoh.auth.user``, else ``guest``); with
+    Zenoh authentication it must be the authenticated user. ``server_key``: the server's public key
+    (``ed25519:...``, printed by ``rocketdrl-ma serve``) to pin; without it the client uses
+    ``<key_dir>/server.pub`` if that exists (same machine and folder as the server), else the key
+    remembered in the known-servers file, else, with ``trust_on_first_use``, the one key the server
+    announces (remembered from then on; several different announced keys are refused).
+    ``admin_secret_file`` or ``admin_secret`` (hex): for create and stop (default
+    ``<key_dir>/admin.secret`` if it exists). ``key_dir`` defaults to ``runs/server/<server>``.
+    """
+    server: str = "local"
+    zenoh: ZenohSettings = field(default_factory=lambda: ZenohSettings(mode="client", connect=(DEFAULT_ENDPOINT,)))
+    user: str | None = None
+    server_key: str | None = None
+    key_dir: str | None = None
+    admin_secret_file: str | None = None
+    admin_secret: str | None = None
+    trust_on_first_use: bool = True
+    known_servers: str | None = None
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ClientSettings":
+        d = dict(d or {})
+        _unknown("client", d, [f.name for f in fields(cls)])
+        check_name("server", d.get("server", cls.server))
+        if "zenoh" in d and not isinstance(d["zenoh"], ZenohSettings):
+            d["zenoh"] = ZenohSettings.from_dict(d["zenoh"])
+        if d.get("user") is not None:
+            check_name("user", d["user"])
+        if d.get("server_key") is not None:
+            from .crypto import parse_public_key
+            parse_public_key(d["server_key"])
+        for key in ("key_dir", "admin_secret_file", "known_servers"):
+            if d.get(key) is not None and not isinstance(d[key], str):
+                raise ValueError(f"{key}: expected a path, got {d[key]!r}")
+        if d.get("admin_secret") is not None:
+            from .crypto import parse_secret
+            parse_secret(d["admin_secret"], "admin_secret")
+        if not isinstance(d.get("trust_on_first_use", True), bool):
+            raise ValueError(f"trust_on_first_use: expected true or false, got {d['trust_on_first_use']!r}")
+        settings = cls(**d)
+        if settings.zenoh.mode != "client":
+            raise ValueError(f"zenoh.mode: a bot, spectator or lobby client connects as a client (Zenoh access "
+                             f"control does not hold for peers), got {settings.zenoh.mode!r}")
+        auth_user = settings.zenoh.auth.get("user")
+        if auth_user is not None and settings.user is not None and auth_user != settings.user:
+            raise ValueError(f"user: {settings.user!r} differs from zenoh.auth.user {auth_user!r}; the server "
+                             "knows a client by its authenticated user")
+        return settings
+
+    @classmethod
+    def load(cls, path: str | Path, **overrides: Any) -> "ClientSettings":
+        raw = _load_yaml(path, "client config")
+        return cls.from_dict({**raw, **{k: v for k, v in overrides.items() if v is not None}})
+
+    def replace(self, **changes: Any) -> "ClientSettings":
+        return ClientSettings.from_dict({**{f.name: getattr(self, f.name) for f in fields(self)}, **changes})
+
+    @property
+    def user_name(self) -> str:
+        return self.user or self.zenoh.auth.get("user") or DEFAULT_USER
+
+    @property
+    def keys_path(self) -> Path:
+        return Path(self.key_dir if self.key_dir is not None else f"runs/server/{self.server}")
+
+    @property
+    def known_servers_path(self) -> Path:
+        return Path(self.known_servers) if self.known_servers else known_servers_path()

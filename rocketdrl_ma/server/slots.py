@@ -1,12 +1,12 @@
-"""One match's seats: who plays each agent slot, its secret token, its counters; and the per-slot
+"""One match's seats: who plays each agent slot, its secret, its counters; and the per-slot
 observation builder and action parser the server plugs into the env.
 
-A slot is ``open`` (nobody yet), ``remote`` (a bot joined and holds its token; it may be connected or
-not, per its Zenoh liveliness token) or ``fill`` (the server plays it: a scripted bot or idle).
+A slot is ``open`` (nobody yet), ``remote`` (a bot joined and holds its secret; it may be connected or
+not, per its Zenoh liveliness token and its recent actions) or ``fill`` (the server plays it: a scripted
+bot or idle). A slot may be reserved: for a ticket's holder, or for a user (a seat).
 """
 from __future__ import annotations
 
-import hmac
 import secrets
 from dataclasses import dataclass, field
 
@@ -21,22 +21,19 @@ NEUTRAL = CarControls()
 _NO_OBS = np.zeros(0, dtype=np.float32)
 
 
-def same_token(given: object, expected: str | None) -> bool:
-    """Constant-time token check; anything but a matching string is False."""
-    if not isinstance(given, str) or expected is None:
-        return False
-    return hmac.compare_digest(given.encode("utf-8", "replace"), expected.encode())
-
-
 @dataclass
 class Slot:
     name: str
     occupant: str = "open"  # open | remote | fill
     bot: str | None = None  # the entrant's name
-    token: str | None = None
+    user: str | None = None  # the player's user: its keys live under rocketdrl/<server>/u/<user>
+    secret: bytes | None = None  # agreed at the join (X25519); keys every action's MAC
+    ticket: bytes | None = None  # needed to join this slot unless the match is open or the slot a seat
+    seat: str | None = None  # the only user who may join this slot
     lease: str | None = None  # public id of the current connection's liveliness token
     alive: bool = False
-    left: bool = False  # the bot left a running match: its token no longer works
+    stalled: bool = False  # missed a streak of decisions: not waited for until its next action
+    left: bool = False  # the bot left a running match: its secret no longer works
     obs_spec: dict | None = None  # a requested observation builder (None: the match's)
     action_spec: dict | None = None
     obs_builder: ObsBuilder | None = None
@@ -45,30 +42,47 @@ class Slot:
     last_controls: CarControls = field(default_factory=CarControls)
     pending: CarControls | None = None  # this decision's action, once it arrived
     acted_decision: int = -1  # last decision this slot answered
+    missed_streak: int = 0
     counts: dict = field(default_factory=lambda: dict.fromkeys(
         ("received", "missed", "disconnected", "late", "invalid"), 0))
 
-    def take(self, bot: str) -> None:
-        self.occupant, self.bot, self.left = "remote", bot, False
-        self.token = secrets.token_urlsafe(24)
+    def take(self, bot: str, user: str, secret: bytes) -> None:
+        self.occupant, self.bot, self.user, self.secret, self.left = "remote", bot, user, secret, False
         self.new_lease()
 
     def new_lease(self) -> None:
         self.lease = secrets.token_hex(8)
-        self.alive = False
+        self.alive = self.stalled = False
+        self.missed_streak = 0
 
     def release(self) -> None:
-        self.occupant, self.bot, self.token, self.lease, self.alive = "open", None, None, None, False
+        self.occupant, self.bot, self.user, self.secret, self.lease, self.alive = "open", None, None, None, None, False
         self.obs_spec = self.action_spec = self.obs_builder = self.action_parser = None
+
+    def heard(self) -> None:
+        """An authenticated action arrived: the bot is there, whatever its liveliness says."""
+        self.missed_streak, self.stalled = 0, False
+
+    def missed(self, streak_limit: int) -> str:
+        """Count one decision without this slot's action; ``missed`` or ``disconnected``."""
+        if not self.waits_for:
+            self.counts["disconnected"] += 1
+            return "disconnected"
+        self.counts["missed"] += 1
+        self.missed_streak += 1
+        if streak_limit and self.missed_streak >= streak_limit:
+            self.stalled = True  # a forged liveliness token cannot make the match wait for a dead bot
+        return "missed"
 
     @property
     def waits_for(self) -> bool:
         """A connected remote bot the server expects an action from."""
-        return self.occupant == "remote" and self.alive and not self.left
+        return self.occupant == "remote" and self.alive and not self.left and not self.stalled
 
     def public(self) -> dict:
-        return {"occupant": self.occupant, "bot": self.bot, "connected": self.waits_for, "left": self.left,
-                **self.counts}
+        return {"occupant": self.occupant, "bot": self.bot, "user": self.user, "connected": self.waits_for,
+                "alive": self.alive, "stalled": self.stalled, "left": self.left, "seat": self.seat,
+                "ticket": self.ticket is not None, **self.counts}
 
 
 class SlotObservations(ObsBuilder):

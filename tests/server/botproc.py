@@ -1,11 +1,11 @@
 """Bots with test behaviours, run as separate processes by the server tests (not a pytest module).
 
-    python tests/server/botproc.py --connect tcp/127.0.0.1:PORT --server test --match m --slots blue_0,blue_1
-        [--policy scripted:ball_chaser] [--delay-ms 300]
+    python tests/server/botproc.py --connect tcp/127.0.0.1:PORT --server test --key-dir DIR --match m
+        --slots blue_0,blue_1 [--policy scripted:ball_chaser] [--delay-ms 300]
 
 Each slot plays in its own thread (one Zenoh session per process). ``--delay-ms`` makes every
 decision that much slower, to play a bot that misses the lockstep deadline. Prints
-``joined SLOT TOKEN`` per slot and ``done SLOT DECISIONS REASON`` at the end.
+``joined SLOT REJOIN_TOKEN`` per slot and ``done SLOT DECISIONS REASON`` at the end.
 """
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ import sys
 import threading
 import time
 
-from rocketdrl_ma.server.bot import PolicyBot, local_client_settings
+from rocketdrl_ma.server.bot import PolicyBot
+from rocketdrl_ma.server.settings import ClientSettings
 
 
 class DelayedBot(PolicyBot):
@@ -31,12 +32,15 @@ def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--connect", required=True)
     ap.add_argument("--server", required=True)
+    ap.add_argument("--key-dir", required=True)
     ap.add_argument("--match", required=True)
     ap.add_argument("--slots", required=True)
     ap.add_argument("--policy", default="scripted:ball_chaser")
     ap.add_argument("--delay-ms", type=float, default=0.0)
     args = ap.parse_args()
-    session = local_client_settings([args.connect]).open()
+    client = ClientSettings.from_dict({"server": args.server, "key_dir": args.key_dir,
+                                       "zenoh": {"mode": "client", "connect": [args.connect]}})
+    session = client.zenoh.open()
     failures = []
     lock = threading.Lock()
 
@@ -47,8 +51,8 @@ def main() -> int:
     def play(slot: str) -> None:
         try:
             bot = DelayedBot(args.policy, args.delay_ms / 1e3)
-            report = bot.run(args.match, slot, server=args.server, session=session,
-                             on_joined=lambda j: say(f"joined {j.slot} {j.token}"))
+            report = bot.run(args.match, slot, client=client, session=session,
+                             on_joined=lambda j: say(f"joined {j.slot} {j.rejoin_token}"))
             say(f"done {slot} {report.decisions} {report.reason}")
         except Exception as e:  # reported on stdout for the test to show
             failures.append(slot)

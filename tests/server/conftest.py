@@ -1,8 +1,25 @@
 """Fixtures of the match server tests (helpers live in ``server_helpers.py``)."""
 from __future__ import annotations
 
+import os
+
 import pytest
 from server_helpers import Procs, Running
+
+
+@pytest.fixture(autouse=True, scope="session")
+def known_servers(tmp_path_factory):
+    """Clients that trust a server on first use remember its key: never in the real home folder during
+    tests (subprocesses inherit the variable)."""
+    path = tmp_path_factory.mktemp("known") / "known_servers"
+    old = os.environ.get("ROCKETDRL_MA_KNOWN_SERVERS")
+    os.environ["ROCKETDRL_MA_KNOWN_SERVERS"] = str(path)
+    yield path
+    if old is None:
+        del os.environ["ROCKETDRL_MA_KNOWN_SERVERS"]
+    else:
+        os.environ["ROCKETDRL_MA_KNOWN_SERVERS"] = old
+
 
 @pytest.fixture
 def running(tmp_path):

@@ -10,9 +10,9 @@ import threading
 import time
 from pathlib import Path
 
-from rocketdrl_ma.server.bot import LobbyClient, local_client_settings
+from rocketdrl_ma.server.client import LobbyClient, SealedStream
 from rocketdrl_ma.server.lobby import MatchServer
-from rocketdrl_ma.server.settings import ServerSettings
+from rocketdrl_ma.server.settings import ClientSettings, ServerSettings, ZenohSettings
 
 REPO = Path(__file__).resolve().parents[2]
 BOTPROC = Path(__file__).with_name("botproc.py")
@@ -38,22 +38,36 @@ def wait_for(predicate, timeout_s: float = 30.0, what: str = "condition", interv
         time.sleep(interval_s)
 
 
-def server_settings(endpoint: str, name: str = "test", **extra) -> ServerSettings:
-    return ServerSettings.from_dict({"name": name, "zenoh": {"mode": "peer", "listen": [endpoint]}, **extra})
+def server_settings(endpoint: str, name: str = "test", key_dir: Path | None = None, **extra) -> ServerSettings:
+    """A loopback peer server; its matches are open unless ``match_defaults`` says otherwise."""
+    extra.setdefault("match_defaults", {"open": True})
+    return ServerSettings.from_dict({"name": name, "zenoh": {"mode": "peer", "listen": [endpoint]},
+                                     "key_dir": str(key_dir) if key_dir else None, **extra})
+
+
+def client_settings(endpoint: str, name: str, key_dir: Path, **extra) -> ClientSettings:
+    return ClientSettings.from_dict({"server": name, "key_dir": str(key_dir),
+                                     "zenoh": ZenohSettings(mode="client", connect=(endpoint,)), **extra})
 
 
 class Running:
-    """An in-process server plus a client session and lobby client talking to it."""
+    """An in-process server plus a client session and lobby client talking to it (as user ``guest``, with
+    the admin secret from the server's key dir)."""
 
     def __init__(self, tmp_path: Path, name: str = "test", **extra):
         self.endpoint = free_endpoint()
         self.name = name
         self.results = tmp_path / "results.sqlite"
-        self.server = MatchServer(server_settings(self.endpoint, name, **extra), results_path=str(self.results))
+        self.key_dir = tmp_path / "keys"
+        self.server = MatchServer(server_settings(self.endpoint, name, self.key_dir, **extra),
+                                  results_path=str(self.results))
         self.server.start()
-        self.client_settings = local_client_settings([self.endpoint])
-        self.session = self.client_settings.open()
-        self.lobby = LobbyClient(self.session, name)
+        self.client_settings = client_settings(self.endpoint, name, self.key_dir)
+        self.session = self.client_settings.zenoh.open()
+        self.lobby = LobbyClient(self.session, self.client_settings)
+
+    def client(self, **extra) -> ClientSettings:
+        return self.client_settings.replace(**extra)
 
     def close(self) -> None:
         self.session.close()
@@ -115,23 +129,25 @@ class Procs:
         self.procs.append(p)
         return p
 
-    def bot(self, endpoint: str, server: str, match: str, slot: str | None = None, policy="scripted:ball_chaser",
-            token: str | None = None) -> Proc:
-        argv = cli("bot", "--policy", policy, "--match", match, "--server", server, "--connect", endpoint)
+    def bot(self, running: "Running", match: str, slot: str | None = None, policy="scripted:ball_chaser",
+            rejoin: str | None = None, *extra: str) -> Proc:
+        argv = cli("bot", "--policy", policy, "--match", match, "--server", running.name, "--connect",
+                   running.endpoint, "--key-dir", str(running.key_dir), *extra)
         argv += ["--slot", slot] if slot else []
-        argv += ["--token", token] if token else []
+        argv += ["--rejoin", rejoin] if rejoin else []
         return self.start(argv)
 
-    def botproc(self, endpoint: str, server: str, match: str, slots: list[str], *extra: str) -> Proc:
-        return self.start([sys.executable, str(BOTPROC), "--connect", endpoint, "--server", server, "--match", match,
-                           "--slots", ",".join(slots), *extra])
+    def botproc(self, running: "Running", match: str, slots: list[str], *extra: str) -> Proc:
+        return self.start([sys.executable, str(BOTPROC), "--connect", running.endpoint, "--server", running.name,
+                           "--key-dir", str(running.key_dir), "--match", match, "--slots", ",".join(slots), *extra])
 
-    def serve(self, tmp_path: Path, name: str = "test", config: str = "server/local.yaml") -> tuple[Proc, str]:
+    def serve(self, tmp_path: Path, name: str = "test", config: str = "server/local.yaml") -> "Served":
         endpoint = free_endpoint()
+        key_dir = tmp_path / "keys"
         p = self.start(cli("serve", config, "--listen", endpoint, "--name", name, "--results",
-                           str(tmp_path / "results.sqlite")))
+                           str(tmp_path / "results.sqlite"), "--key-dir", str(key_dir)))
         p.line("serving", 60.0)
-        return p, endpoint
+        return Served(p, endpoint, name, key_dir)
 
     def kill_all(self) -> None:
         for p in self.procs:
@@ -140,20 +156,33 @@ class Procs:
             p.popen.wait(10)
 
 
+class Served:
+    """A ``rocketdrl-ma serve`` subprocess: its process, endpoint, name and key dir (like ``Running``)."""
+
+    def __init__(self, proc: Proc, endpoint: str, name: str, key_dir: Path):
+        self.proc, self.endpoint, self.name, self.key_dir = proc, endpoint, name, key_dir
+        self.client_settings = client_settings(endpoint, name, key_dir)
+
+    def client_args(self) -> list[str]:
+        return ["--server", self.name, "--connect", self.endpoint, "--key-dir", str(self.key_dir)]
+
+
 class RawBot:
-    """A bot driven by hand over the raw protocol (join, liveliness, observations in, actions out), for tests
-    that need to send exactly what they choose: late, missing, malformed or forged actions."""
+    """A bot driven by hand over the protocol (join, liveliness, verified observations in, actions out), for
+    tests that need to send exactly what they choose: late, missing, malformed or forged actions."""
 
     def __init__(self, session, lobby: LobbyClient, match: str, slot: str | None = None, answer=None,
                  **join_fields):
-        """``answer(message)`` runs on each observation message as it arrives and may return an action to
+        """``answer(message)`` runs on each verified observation as it arrives and may return an action to
         send at once (None: stay silent)."""
-        from rocketdrl_ma.server.protocol import unpack
-        self.session, self._unpack, self._answer = session, unpack, answer
+        self.session, self._answer = session, answer
         self.join = lobby.join(match, slot, **join_fields)
         self.messages: list[dict] = []
         self.errors: list[str] = []
         keys = self.join.keys
+        stream = lambda kinds: SealedStream(lobby.server_key, lobby.keys.server, match, self.join.instance,  # noqa
+                                            kinds, slot=self.join.slot)
+        self.obs_stream, self.error_stream = stream(("obs",)), stream(("error",))
         self._subs = [
             session.declare_subscriber(keys["obs"], self._on_obs),
             session.declare_subscriber(keys["error"], self._on_error),
@@ -161,21 +190,86 @@ class RawBot:
         self._token = session.liveliness().declare_token(self.join.keys["alive"])
 
     def _on_obs(self, sample) -> None:
-        message = self._unpack(sample.payload.to_bytes(), 1 << 24)
+        message = self.obs_stream.open(sample.payload.to_bytes())
+        if message is None:
+            return
         self.messages.append(message)
         action = self._answer(message) if self._answer is not None and not message["done"] else None
         if action is not None:
             self.send(action, message["decision"])
 
     def _on_error(self, sample) -> None:
-        self.errors.append(self._unpack(sample.payload.to_bytes())["error"])
+        message = self.error_stream.open(sample.payload.to_bytes())
+        if message is not None:
+            self.errors.append(message["error"])
 
-    def send(self, action, decision: int, token: str | None = None, key: str | None = None) -> None:
-        from rocketdrl_ma.server.protocol import pack
-        self.session.put(key or self.join.keys["act"], pack({"token": token or self.join.token, "decision": decision,
-                                                             "action": action}))
+    def send(self, action, decision: int, secret: bytes | None = None, key: str | None = None,
+             slot: str | None = None) -> None:
+        from rocketdrl_ma.server.protocol import action_message
+        self.session.put(key or self.join.keys["act"], action_message(
+            secret or self.join.secret, self.join.match, slot or self.join.slot, decision, action))
 
     def disconnect(self) -> None:
         self._token.undeclare()
         for s in self._subs:
             s.undeclare()
+
+
+HOSTILE = Path(__file__).with_name("hostile.py")
+ROLES = {"ops": "admin", "alice": "player", "bob": "player", "mallory": "player", "web": "spectator"}
+
+
+def write_yaml(path: Path, data: dict) -> str:
+    import yaml
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return str(path)
+
+
+def secure_config(tmp_path: Path, endpoint: str, name: str = "lab", mode: str = "peer", **extra) -> dict:
+    """A server YAML (as a dict) with Zenoh users and access control; its files live under ``tmp_path/keys``.
+    ``mode`` peer: it listens on ``endpoint`` with TLS; client: it connects to a router there."""
+    keys = tmp_path / "keys"
+    zenoh = ({"mode": "peer", "listen": [endpoint],
+              "tls": {"listen_certificate": str(keys / "tls/cert.pem"), "listen_private_key": str(keys / "tls/key.pem")}}
+             if mode == "peer" else {"mode": "client", "connect": [endpoint]})
+    return {"name": name, "zenoh": zenoh, "key_dir": str(keys),
+            "access": {"users_file": str(keys / "users.txt"), "roles": dict(ROLES)},
+            "match_defaults": {"open": False}, **extra}
+
+
+def free_tls_endpoint() -> str:
+    return free_endpoint().replace("tcp/", "tls/")
+
+
+class Secure:
+    """An in-process server with Zenoh users, TLS and access control (the server is the peer holding the
+    ACL), every file made by ``rocketdrl-ma keys``; ``client(user)`` loads that user's client YAML."""
+
+    def __init__(self, tmp_path: Path, name: str = "lab", **extra):
+        from rocketdrl_ma.server.keygen import make_keys
+        self.name, self.endpoint, self.tmp_path = name, free_tls_endpoint(), tmp_path
+        self.config_path = write_yaml(tmp_path / "server.yaml", secure_config(tmp_path, self.endpoint, name, **extra))
+        self.made = make_keys(self.config_path, tls_hosts=["127.0.0.1"])
+        self.key_dir = tmp_path / "keys"
+        self.results = tmp_path / "results.sqlite"
+        self.server = MatchServer(ServerSettings.load(self.config_path), results_path=str(self.results)).start()
+        self.sessions: dict[str, object] = {}
+
+    def client_file(self, user: str) -> str:
+        return str(self.key_dir / "clients" / f"{user}.yaml")
+
+    def client(self, user: str) -> ClientSettings:
+        return ClientSettings.load(self.client_file(user))
+
+    def session(self, user: str):
+        if user not in self.sessions:
+            self.sessions[user] = self.client(user).zenoh.open()
+        return self.sessions[user]
+
+    def lobby(self, user: str) -> LobbyClient:
+        return LobbyClient(self.session(user), self.client(user))
+
+    def close(self) -> None:
+        for s in self.sessions.values():
+            s.close()
+        self.server.close()

@@ -31,8 +31,10 @@ def checkpoint(tmp_path_factory) -> str:
 
 @pytest.mark.slow
 def test_serve_lobby_watch_and_bots_as_commands(procs, tmp_path, checkpoint):
-    server, endpoint = procs.serve(tmp_path, name="cli")
-    client = ["--server", "cli", "--connect", endpoint]
+    served = procs.serve(tmp_path, name="cli")
+    server, client = served.proc, served.client_args()
+    key_line = server.line("server key ed25519:")
+    assert (served.key_dir / "server.pub").read_text().strip() in key_line
     create = procs.start(cli("lobby", "create", "matches/1v1.yaml", "--id", "M", "--ready-timeout", "120", *GAME,
                              *client))
     assert create.wait(60) == 0, create.output()

@@ -14,7 +14,7 @@ def test_four_concurrent_4v4_matches_finish_and_record_results(running, procs):
     matches = [f"m{i}" for i in range(4)]
     for match in matches:
         running.lobby.create("matches/4v4.yaml", match, overrides=SHORT, ready_timeout_s=300)
-    bots = [procs.botproc(running.endpoint, "test", match, slots) for match in matches for slots in TEAMS.values()]
+    bots = [procs.botproc(running, match, slots) for match in matches for slots in TEAMS.values()]
     infos = {match: running.wait_status(match, timeout_s=300) for match in matches}
     for p in bots:
         assert p.wait(60) == 0, p.output()

@@ -1,5 +1,6 @@
 """Wire format: msgpack maps with a protocol version, numpy arrays as raw bytes + dtype + shape,
-game states that survive the trip, and every kind of malformed payload refused with a reason."""
+game states that survive the trip, every kind of malformed payload refused with a reason; signed server
+messages and MAC'd actions that any tampering breaks; the slot secret both sides derive."""
 from __future__ import annotations
 
 import dataclasses
@@ -11,9 +12,11 @@ import pytest
 import rocketdrl_ma
 from rocketdrl_ma.physics import PRESETS
 from rocketdrl_ma.rules.state import Obstacle
-from rocketdrl_ma.server.protocol import (PROTOCOL_VERSION, Keys, ProtocolError, VersionError, check_name,
-                                          decode_space, decode_state, encode_space, encode_state, pack,
-                                          pack_value, pack_with_raw, unpack)
+from rocketdrl_ma.server.crypto import (KeyExchange, ServerIdentity, ServerKey, SignatureError, action_mac,
+                                        parse_public_key, random_bytes, request_mac)
+from rocketdrl_ma.server.protocol import (PROTOCOL_VERSION, Keys, ProtocolError, VersionError, action_message,
+                                          check_name, decode_space, decode_state, encode_space, encode_state,
+                                          open_sealed, pack, pack_map, pack_value, seal, split_action, unpack)
 
 
 @pytest.mark.parametrize("dtype", ["<f4", "<f8", "<i8", "|u1", "|b1", ">i4"])
@@ -67,13 +70,14 @@ def test_version_size_and_garbage_checks():
         unpack(pack({"blob": b"x" * 2000}), max_bytes=1000)
 
 
-def test_pack_with_raw_is_an_ordinary_map():
+@pytest.mark.parametrize("n_entries", [3, 15, 16, 40])
+def test_pack_map_with_prepacked_values_is_an_ordinary_map(n_entries):
     inner = {"x": np.ones(3, np.float32), "n": 4}
-    combined = pack_with_raw({"a": 1, "b": "two"}, {"inner": pack_value(inner)})
-    plain = unpack(combined)
-    assert plain["a"] == 1 and plain["b"] == "two" and plain["inner"]["n"] == 4
-    assert np.array_equal(plain["inner"]["x"], inner["x"])
-    assert plain.keys() == unpack(pack({"a": 1, "b": "two", "inner": inner})).keys()
+    message = {f"k{i}": i for i in range(n_entries - 1)}
+    combined = pack_map(message, {"inner": pack_value(inner)})
+    plain = msgpack.unpackb(combined, raw=False)  # what any msgpack library sees (fixmap, then map16)
+    assert {k: v for k, v in plain.items() if k != "inner"} == message and plain["inner"]["n"] == 4
+    assert unpack(pack({"body": combined}))["body"] == combined
 
 
 def _assert_states_equal(a, b):
@@ -135,11 +139,70 @@ def test_spaces_round_trip():
 
 def test_keys_and_names():
     keys = Keys("lab")
-    assert keys.slot("m1", "blue_0", "obs") == "rocketdrl/lab/match/m1/blue_0/obs"
-    assert keys.parse_bot_alive(keys.bot_alive("m1", "orange_2", "ab12")) == ("m1", "orange_2", "ab12")
-    assert keys.parse_bot_alive("rocketdrl/other/match/m1/blue_0/alive/x") is None
-    assert keys.parse_action_slot("m1", "rocketdrl/lab/match/m1/blue_0/act") == "blue_0"
-    assert keys.parse_action_slot("m1", "rocketdrl/lab/match/m2/blue_0/act") is None
+    assert keys.slot("alice", "m1", "blue_0", "obs") == "rocketdrl/lab/u/alice/match/m1/blue_0/obs"
+    assert keys.lobby("alice") == "rocketdrl/lab/u/alice/lobby" and keys.parse_lobby_user(keys.lobby("bob")) == "bob"
+    assert keys.parse_lobby_user("rocketdrl/lab/u/bob/invite") is None
+    assert keys.parse_lobby_user("rocketdrl/other/u/bob/lobby") is None
+    alive = keys.bot_alive("alice", "m1", "orange_2", "ab12")
+    assert alive == "rocketdrl/lab/u/alice/match/m1/orange_2/alive/ab12"
+    assert keys.parse_bot_alive(alive) == ("alice", "m1", "orange_2", "ab12")
+    assert keys.parse_bot_alive("rocketdrl/other/u/alice/match/m1/blue_0/alive/x") is None
     for bad in ("a/b", "*", "**", "", "x" * 65, "a$b", 3):
         with pytest.raises(ValueError, match="server"):
             check_name("server", bad)
+
+
+def test_sealed_messages_verify_and_any_change_breaks_them():
+    identity, other = ServerIdentity.generate(), ServerIdentity.generate()
+    key = ServerKey.parse(identity.public_text)
+    assert key.raw == parse_public_key(identity.public_text) and len(key.raw) == 32
+    state = pack_value({"tick": 8})
+    sealed = seal(identity, {"kind": "obs", "seq": 3, "obs": np.arange(4, dtype=np.float32)}, {"state": state})
+    body = open_sealed(key, sealed, 1 << 20)
+    assert body["kind"] == "obs" and body["seq"] == 3 and body["state"] == {"tick": 8}
+    assert np.array_equal(body["obs"], np.arange(4, dtype=np.float32))
+    with pytest.raises(SignatureError):  # someone else's key
+        open_sealed(key, seal(other, {"kind": "obs", "seq": 3}), 1 << 20)
+    envelope = msgpack.unpackb(sealed, raw=False)
+    for i in range(0, len(envelope["body"]), 7):  # flip any byte of the body: the signature no longer holds
+        tampered = bytearray(envelope["body"])
+        tampered[i] ^= 0x01
+        with pytest.raises(SignatureError):
+            open_sealed(key, pack({"body": bytes(tampered), "sig": envelope["sig"]}), 1 << 20)
+    with pytest.raises(ProtocolError, match="v, body: bin, sig: bin"):
+        open_sealed(key, pack({"kind": "obs", "seq": 4}), 1 << 20)  # an unsigned message
+    for bad in ("ed25519:abc", "rsa:" + identity.public_text[8:], identity.public_text[:-4]):
+        with pytest.raises(ValueError, match="server_key"):
+            parse_public_key(bad)
+
+
+def test_action_mac_covers_match_slot_decision_and_action():
+    secret = random_bytes(32)
+    message = action_message(secret, "m1", "blue_0", 7, np.ones(8, np.float32))
+    body, mac = split_action(message)
+    assert mac == action_mac(secret, body)
+    assert msgpack.unpackb(body, raw=False).keys() == {"match", "slot", "decision", "action"}
+    others = [action_message(secret, "m2", "blue_0", 7, np.ones(8, np.float32)),
+              action_message(secret, "m1", "orange_0", 7, np.ones(8, np.float32)),
+              action_message(secret, "m1", "blue_0", 8, np.ones(8, np.float32)),
+              action_message(secret, "m1", "blue_0", 7, np.zeros(8, np.float32))]
+    assert len({split_action(m)[1] for m in others} | {mac}) == 5  # each field changes the MAC
+    assert action_mac(random_bytes(32), body) != mac
+    with pytest.raises(ProtocolError, match="mac"):
+        split_action(pack({"body": body, "mac": mac[:16]}))
+    assert request_mac(secret, "join", "lab", "alice", b"c" * 16, b"\x80") != \
+        request_mac(secret, "join", "lab", "bob", b"c" * 16, b"\x80")  # bound to the asking user
+
+
+def test_both_sides_derive_the_same_slot_secret_and_nobody_else_can():
+    bot, server, eve = KeyExchange(), KeyExchange(), KeyExchange()
+    nonce = random_bytes()
+    ours = bot.slot_secret(server.public_bytes, nonce, "lab", "m1", "blue_0")
+    assert ours == server.slot_secret(bot.public_bytes, nonce, "lab", "m1", "blue_0") and len(ours) == 32
+    # someone who saw both public keys (and the nonce) but holds neither private key gets another secret
+    assert eve.slot_secret(server.public_bytes, nonce, "lab", "m1", "blue_0") != ours
+    assert server.slot_secret(bot.public_bytes, nonce, "lab", "m1", "orange_0") != ours  # bound to the slot
+    with pytest.raises(ValueError, match="client_key"):
+        server.slot_secret(bytes(32), nonce, "lab", "m1", "blue_0")  # a low-order point gives no secret
+    with pytest.raises(ValueError, match="client_key"):
+        server.slot_secret(b"short", nonce, "lab", "m1", "blue_0")

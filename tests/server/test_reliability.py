@@ -1,6 +1,7 @@
 """Nothing a bot does can stall or break a match: killed bots, slow bots, malformed and forged actions,
 join/leave churn, a killed server, and a server that listens on loopback only. Real Zenoh sessions on
-loopback, real bot subprocesses (``rocketdrl-ma bot`` and ``botproc.py``)."""
+loopback, real bot subprocesses (``rocketdrl-ma bot`` and ``botproc.py``). Attacks by other clients on
+the network are in ``test_attacks.py``."""
 from __future__ import annotations
 
 import os
@@ -15,8 +16,8 @@ from server_helpers import SHORT, RawBot, wait_for
 
 from rocketdrl_ma.results import ResultsStore
 from rocketdrl_ma.server import LobbyClient
-from rocketdrl_ma.server.bot import local_client_settings
-from rocketdrl_ma.server.protocol import PROTOCOL_VERSION, pack, unpack
+from rocketdrl_ma.server.crypto import random_bytes
+from rocketdrl_ma.server.protocol import PROTOCOL_VERSION, action_message, open_sealed, pack
 
 NEUTRAL = np.array([0, 0, 0, 0, 0, -1, -1, -1], np.float32)
 
@@ -29,9 +30,10 @@ def slot_info(running, match: str, slot: str) -> dict:
 def test_killed_bot_is_replaced_shown_disconnected_and_rejoins(running, procs):
     # orange answers every decision 25 ms late (within the deadline): it sets a pace a test can follow
     running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 40.0}, ready_timeout_s=120)
-    blue = procs.bot(running.endpoint, "test", "m", "blue_0")
-    procs.botproc(running.endpoint, "test", "m", ["orange_0"], "--delay-ms", "25")
-    token = blue.line("joined match m as blue_0").rsplit("--token ", 1)[1]
+    blue = procs.bot(running, "m", "blue_0")
+    procs.botproc(running, "m", ["orange_0"], "--delay-ms", "25")
+    token = blue.line("joined match m as blue_0").rsplit("--rejoin ", 1)[1]
+    assert token.startswith("blue_0:")
     wait_for(lambda: slot_info(running, "m", "blue_0")["received"] >= 20, 60, "blue to play 20 decisions")
     os.kill(blue.pid, signal.SIGKILL)
     gone = wait_for(lambda: (lambda s: s if not s["connected"] else None)(slot_info(running, "m", "blue_0")), 15,
@@ -40,7 +42,7 @@ def test_killed_bot_is_replaced_shown_disconnected_and_rejoins(running, procs):
     # the match goes on without it: decisions advance, blue's are replaced and counted as disconnected
     wait_for(lambda: slot_info(running, "m", "blue_0")["disconnected"] >= 10, 30, "replaced decisions")
     assert running.lobby.inspect("m")["status"] == "running"
-    rejoined = procs.bot(running.endpoint, "test", "m", "blue_0", token=token)
+    rejoined = procs.bot(running, "m", rejoin=token)
     assert rejoined.line("joined match m as blue_0").endswith(token)
     wait_for(lambda: (lambda s: s["connected"] and s["received"] > received_at_kill + 10)(
         slot_info(running, "m", "blue_0")), 60, "the rejoined bot to play")
@@ -56,8 +58,8 @@ def test_slow_bot_never_slows_the_others(running, procs):
     # the slow bot thinks 5x longer than the deadline (generous: the fast bot must answer within it)
     running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 2.0}, ready_timeout_s=120,
                          deadline_ms=150)
-    fast = procs.bot(running.endpoint, "test", "m", "blue_0")
-    slow_bot = procs.botproc(running.endpoint, "test", "m", ["orange_0"], "--delay-ms", "750")
+    fast = procs.bot(running, "m", "blue_0")
+    slow_bot = procs.botproc(running, "m", ["orange_0"], "--delay-ms", "750")
     info = running.wait_status("m", timeout_s=120)
     assert fast.wait(60) == 0 and slow_bot.wait(60) == 0
     n = info["decision"]
@@ -75,33 +77,36 @@ def test_slow_bot_never_slows_the_others(running, procs):
 def test_malformed_payloads_are_dropped_and_counted(running, procs):
     running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 30.0}, ready_timeout_s=120)
     states = []
-    sub = running.session.declare_subscriber(running.server.keys.state("m"),
-                                             lambda s: states.append(unpack(s.payload.to_bytes(), 1 << 24)))
-    procs.bot(running.endpoint, "test", "m", "blue_0")
+    sub = running.session.declare_subscriber(running.server.keys.state("m"), lambda s: states.append(
+        open_sealed(running.lobby.server_key, s.payload.to_bytes(), 1 << 24)))
+    procs.bot(running, "m", "blue_0")
     orange = RawBot(running.session, running.lobby, "m", "orange_0", answer=lambda m: NEUTRAL)
     wait_for(lambda: len(orange.messages) > 5, 60, "the match to run")
-    key, token, put = orange.join.keys["act"], orange.join.token, running.session.put
+    key, secret, put = orange.join.keys["act"], orange.join.secret, running.session.put
     decision = lambda: orange.messages[-1]["decision"]  # noqa: E731
     put(key, np.random.default_rng(0).bytes(200))                                             # malformed
     put(key, msgpack.packb([1, 2, 3]))                                                        # malformed
-    put(key, b"\x00" * (10 * 1024 * 1024))                                                    # oversize
-    put(key, msgpack.packb({"v": PROTOCOL_VERSION + 1, "token": token, "decision": 0, "action": [0] * 8}))
-    put(key, pack({"decision": decision(), "action": NEUTRAL}))                              # bad_token
-    put(key.replace("orange_0", "purple_0"), pack({"token": token, "decision": 0, "action": NEUTRAL}))
+    put(key, b"\x00" * (512 * 1024))                                                          # oversize
+    put(key, b"\x00" * (10 * 1024 * 1024))                         # over Zenoh's max_message_size: never seen
+    put(key, msgpack.packb({"v": PROTOCOL_VERSION + 1, "body": b"", "mac": b"\0" * 32}))      # bad_version
+    put(key, pack({"body": pack({"decision": decision()}), "mac": random_bytes(32)}))         # bad_mac
+    # keys of no slot, or of the slot under another user's prefix: the server does not even listen there
+    put(key.replace("orange_0", "purple_0"), action_message(secret, "m", "purple_0", 0, NEUTRAL))
+    put(key.replace("/u/guest/", "/u/mallory/"), action_message(secret, "m", "orange_0", 0, NEUTRAL))
+    orange.send(NEUTRAL, decision(), slot="blue_0")                 # invalid: the body names another slot
     orange.send(np.zeros(5, np.float32), decision())                                          # invalid
     orange.send(np.full(8, np.nan, np.float32), decision())                                   # invalid
     orange.send(np.full(8, 7.0, np.float32), decision())                                      # invalid
-    orange.send({"$nd": "|O", "shape": [1], "data": b"\0" * 8}, decision())                   # malformed
-    expected = {"malformed": 3, "oversize": 1, "bad_version": 1, "bad_token": 1, "unknown_slot": 1,
-                "invalid_action": 3}
+    orange.send({"$nd": "|O", "shape": [1], "data": b"\0" * 8}, decision())                   # invalid
+    expected = {"malformed": 2, "oversize": 1, "bad_version": 1, "bad_mac": 1, "invalid_action": 5}
     wait_for(lambda: all(running.lobby.inspect("m")["rejected"].get(k, 0) >= v for k, v in expected.items()),
              30, f"the server to count {expected}")
-    wait_for(lambda: len(orange.errors) == 3, 10, "error messages to the token holder")
-    assert all(e.startswith("action for orange_0") for e in orange.errors), orange.errors
+    wait_for(lambda: len(orange.errors) == 5, 10, "signed error messages to the slot's bot")
+    assert sum(e.startswith("action for orange_0") for e in orange.errors) == 3, orange.errors
     info = running.wait_status("m", timeout_s=120)
     rejected = info["rejected"]
-    assert {k: rejected.get(k) for k in expected} == expected
-    assert info["slot_status"]["orange_0"]["invalid"] == 3
+    assert rejected == expected
+    assert info["slot_status"]["orange_0"]["invalid"] == 5
     assert info["slot_status"]["orange_0"]["received"] >= 0.9 * info["decision"]
     # no state was corrupted: every published state is finite and the match ended normally with a result
     for s in states:
@@ -115,27 +120,27 @@ def test_malformed_payloads_are_dropped_and_counted(running, procs):
     orange.disconnect()
 
 
-def test_acting_for_another_slot_or_with_a_wrong_token_is_rejected(running, procs):
+def test_acting_for_another_slot_with_its_own_secret_or_a_made_up_one_is_rejected(running, procs):
     running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 4.0}, ready_timeout_s=120)
     states = []
-    sub = running.session.declare_subscriber(running.server.keys.state("m"),
-                                             lambda s: states.append(unpack(s.payload.to_bytes(), 1 << 24)))
+    sub = running.session.declare_subscriber(running.server.keys.state("m"), lambda s: states.append(
+        open_sealed(running.lobby.server_key, s.payload.to_bytes(), 1 << 24)))
     forged = np.array([-1, 1, 1, 1, 1, 1, 1, 1], np.float32)  # pitch, yaw and roll: scripted bots never use them
     holder = []
 
     def answer(message):
         blue = holder[0]
         orange_key = blue.join.keys["act"].replace("blue_0", "orange_0")
-        blue.send(forged, message["decision"], key=orange_key)                       # own token, other slot
-        blue.send(forged, message["decision"], token="f" * 32, key=orange_key)       # made-up token
+        blue.send(forged, message["decision"], key=orange_key, slot="orange_0")           # own secret, other slot
+        blue.send(forged, message["decision"], secret=random_bytes(32), key=orange_key, slot="orange_0")
         return NEUTRAL
 
-    procs.bot(running.endpoint, "test", "m", "orange_0")
+    procs.bot(running, "m", "orange_0")
     holder.append(RawBot(running.session, running.lobby, "m", "blue_0", answer=answer))
     info = running.wait_status("m", timeout_s=120)
     blue = holder[0]
     sent = 2 * sum(1 for m in blue.messages if not m["done"])
-    wait_for(lambda: running.lobby.inspect("m")["rejected"].get("bad_token", 0) == sent, 10, "all forgeries counted")
+    wait_for(lambda: running.lobby.inspect("m")["rejected"].get("bad_mac", 0) == sent, 10, "all forgeries counted")
     assert info["slot_status"]["orange_0"]["received"] >= 0.9 * info["decision"]
     orange_controls = [s["state"]["last_controls"]["orange_0"] for s in states]
     assert orange_controls and not any(c[4] == 1.0 for c in orange_controls)  # no forged roll ever applied
@@ -147,11 +152,16 @@ def test_acting_for_another_slot_or_with_a_wrong_token_is_rejected(running, proc
 @pytest.fixture(scope="module")
 def served(tmp_path_factory):
     """One ``rocketdrl-ma serve`` subprocess for the tests that watch the server process from outside."""
-    from server_helpers import Procs
+    import yaml
+    from server_helpers import REPO, Procs
     procs = Procs()
-    proc, endpoint = procs.serve(tmp_path_factory.mktemp("served"), name="sub")
-    session = local_client_settings([endpoint]).open()
-    yield proc, endpoint, LobbyClient(session, "sub")
+    tmp = tmp_path_factory.mktemp("served")
+    config = yaml.safe_load((REPO / "server/local.yaml").read_text())
+    config["limits"] = {"requests_per_s": 0}  # the churn test sends thousands of lobby requests at once
+    (tmp / "server.yaml").write_text(yaml.safe_dump(config))
+    served = procs.serve(tmp, name="sub", config=str(tmp / "server.yaml"))
+    session = served.client_settings.zenoh.open()
+    yield served.proc, served.endpoint, LobbyClient(session, served.client_settings)
     session.close()
     procs.kill_all()
 
@@ -168,14 +178,14 @@ def test_server_listens_on_loopback_only(served):
 def test_join_leave_cycles_do_not_leak(served):
     proc, _, lobby = served
     server = psutil.Process(proc.pid)
-    lobby.create("matches/4v4.yaml", "churn", ready_timeout_s=3600)
+    lobby.create("matches/4v4.yaml", "churn", ready_timeout_s=3600, open=True)
     session = lobby.session
 
     def cycle():
         join = lobby.join("churn")
         token = session.liveliness().declare_token(join.keys["alive"])
         token.undeclare()
-        lobby.leave("churn", join.token)
+        lobby.leave("churn", join.slot, join.secret)
 
     for _ in range(100):  # warm-up: caches, allocator pools, Zenoh's own tables
         cycle()
@@ -191,9 +201,10 @@ def test_join_leave_cycles_do_not_leak(served):
 
 
 def test_killed_server_keeps_every_finished_match(procs, tmp_path):
-    proc, endpoint = procs.serve(tmp_path, name="k")
-    session = local_client_settings([endpoint]).open()
-    lobby = LobbyClient(session, "k")
+    served = procs.serve(tmp_path, name="k")
+    proc = served.proc
+    session = served.client_settings.zenoh.open()
+    lobby = LobbyClient(session, served.client_settings)
     for i in range(3):
         lobby.create("matches/1v1.yaml", f"done{i}", overrides=SHORT, ready_timeout_s=0)
     lobby.create("matches/1v1.yaml", "long", overrides={"clock_s": 300.0}, ready_timeout_s=0)

@@ -1,0 +1,285 @@
+"""The client side of the protocol, shared by bots, spectators and lobby commands: which server key to
+trust, lobby requests with verified replies, and checking the server's signed message streams.
+
+Trusting the key (``trusted_server_key``): a pinned ``server_key``; else ``<key_dir>/server.pub`` (a client
+on the server's machine, in its folder); else the key remembered for this server and endpoints in the
+known-servers file; else, with ``trust_on_first_use``, the key the server announces on
+``rocketdrl/<server>/key``, if exactly one key answers (several different ones are refused), remembered from
+then on. A remembered key that no longer matches is never replaced silently: requests fail until the line
+is removed from the known-servers file.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+from collections import Counter
+from dataclasses import dataclass
+from typing import Any
+
+from .crypto import (KeyExchange, ServerKey, SignatureError, parse_secret, random_bytes, read_secret_file,
+                     request_mac)
+from .protocol import Keys, ProtocolError, decode_space, open_sealed, pack, pack_value, unpack, unpack_map
+from .settings import ClientSettings
+
+log = logging.getLogger(__name__)
+#: a generous bound on any server message (observations carry the game state); refuses absurd ones
+MAX_SERVER_MESSAGE_BYTES = 4 * 1024 * 1024
+
+
+class ServerError(RuntimeError):
+    """The server answered a request with an error (the message says why)."""
+
+
+class ServerGone(ConnectionError):
+    """No reply signed by the server: it is not running (or someone else answers in its name)."""
+
+
+def _known_key(client: ClientSettings) -> str:
+    return f"{client.server} {','.join(sorted(client.zenoh.connect))}"
+
+
+def _read_known(client: ClientSettings) -> str | None:
+    path = client.known_servers_path
+    if not path.is_file():
+        return None
+    wanted = _known_key(client)
+    for line in path.read_text().splitlines():
+        name, _, key = line.rpartition(" ")
+        if name == wanted:
+            return key
+    return None
+
+
+def _announced_keys(session, client: ClientSettings, timeout_s: float) -> set[ServerKey]:
+    """Every key that answers on the well-known key, each proven by a signature over our fresh nonce."""
+    import zenoh
+    keys = Keys(client.server)
+    nonce = random_bytes()
+    found: set[ServerKey] = set()
+    for reply in session.get(keys.key, payload=nonce, timeout=timeout_s,
+                             consolidation=zenoh.ConsolidationMode.NONE):
+        if reply.ok is None:
+            continue
+        try:
+            message = unpack(reply.ok.payload.to_bytes(), 4096)
+            body = unpack_map(message["body"], 4096, "body")
+            key = ServerKey(body["key"])  # self-signed: proves the answerer holds this key, nothing more
+            key.verify(message["body"], message["sig"])
+        except (ProtocolError, SignatureError, KeyError, TypeError, ValueError):
+            continue
+        if body.get("kind") == "key" and body.get("server") == client.server and body.get("nonce") == nonce:
+            found.add(key)
+    return found
+
+
+def trusted_server_key(session, client: ClientSettings, timeout_s: float = 5.0) -> ServerKey:
+    """The key to verify this server's messages with (see the module docstring for the order)."""
+    if client.server_key is not None:
+        return ServerKey.parse(client.server_key)
+    pub = client.keys_path / "server.pub"
+    if pub.is_file():
+        return ServerKey.parse(pub.read_text().strip(), str(pub))
+    known = _read_known(client)
+    if known is not None:
+        return ServerKey.parse(known, f"{client.known_servers_path} ({_known_key(client)})")
+    if not client.trust_on_first_use:
+        raise ValueError(f"server_key: no key pinned for server {client.server!r}; pass --server-key (printed by "
+                         "`rocketdrl-ma serve`) or allow trust_on_first_use")
+    found = _announced_keys(session, client, timeout_s)
+    if not found:
+        raise ServerGone(f"no match server {client.server!r} announced its key on {Keys(client.server).key}")
+    if len(found) > 1:
+        raise ValueError(f"server_key: {len(found)} different keys answer as server {client.server!r} "
+                         f"({sorted(k.text for k in found)}); someone impersonates it: pin the real one with "
+                         "--server-key")
+    key = found.pop()
+    path = client.known_servers_path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a") as f:
+        f.write(f"{_known_key(client)} {key.text}\n")
+    log.warning("trusting server %r key %s on first use (remembered in %s)", client.server, key.text, path)
+    return key
+
+
+@dataclass
+class JoinInfo:
+    """The server's answer to a join: the seat, the slot's secret, and what the match looks like."""
+    match: str
+    instance: str
+    slot: str
+    user: str
+    secret: bytes
+    lease: str
+    status: str
+    mode: str
+    deadline_ms: float
+    decision_ticks: int
+    config: dict
+    observation: dict
+    action: dict
+    observation_space: Any
+    action_space: Any
+    keys: dict
+
+    @classmethod
+    def from_reply(cls, r: dict, secret: bytes) -> "JoinInfo":
+        return cls(match=r["match"], instance=r["instance"], slot=r["slot"], user=r["user"], secret=secret,
+                   lease=r["lease"], status=r["status"], mode=r["mode"], deadline_ms=r["deadline_ms"],
+                   decision_ticks=r["decision_ticks"], config=r["config"], observation=r["observation"],
+                   action=r["action"], observation_space=decode_space(r["observation_space"]),
+                   action_space=decode_space(r["action_space"]), keys=r["keys"])
+
+    @property
+    def rejoin_token(self) -> str:
+        """``<slot>:<secret as hex>``: what ``rocketdrl-ma bot --rejoin`` needs after a crash. Keep it private."""
+        return f"{self.slot}:{self.secret.hex()}"
+
+
+def parse_rejoin_token(token: str) -> tuple[str, bytes]:
+    slot, sep, secret = token.partition(":")
+    if not sep:
+        raise ValueError("rejoin: expected '<slot>:<secret hex>' (printed by the bot when it joined)")
+    return slot, parse_secret(secret, "rejoin")
+
+
+class LobbyClient:
+    """Lobby requests over an open Zenoh session; only replies signed by the server's key count."""
+
+    def __init__(self, session, client: ClientSettings | None = None, timeout_s: float = 5.0, **client_fields):
+        self.session = session
+        self.client = client if client is not None else ClientSettings.from_dict(client_fields)
+        self.keys, self.user, self.timeout_s = Keys(self.client.server), self.client.user_name, timeout_s
+        self._server_key: ServerKey | None = None
+
+    @property
+    def server_key(self) -> ServerKey:
+        if self._server_key is None:
+            self._server_key = trusted_server_key(self.session, self.client, self.timeout_s)
+        return self._server_key
+
+    def admin_secret(self) -> bytes | None:
+        if self.client.admin_secret is not None:
+            return parse_secret(self.client.admin_secret, "admin_secret")
+        path = self.client.admin_secret_file
+        if path is None:
+            default = self.client.keys_path / "admin.secret"
+            path = str(default) if default.is_file() else None
+        return read_secret_file(path, "admin_secret_file") if path is not None else None
+
+    def request(self, op: str, args: dict | None = None, prove_with: bytes | None = None,
+                nonce: bytes | None = None) -> dict:
+        """One lobby op; the reply body, once verified. ``prove_with``: a secret to MAC a fresh challenge with."""
+        import zenoh
+        server_key = self.server_key
+        nonce = nonce or random_bytes()
+        raw_args = pack_value(args or {})
+        message = {"op": op, "nonce": nonce, "args": raw_args}
+        if prove_with is not None:
+            challenge = self.request("challenge")["challenge"]
+            message.update(challenge=challenge, mac=request_mac(prove_with, op, self.keys.server, self.user,
+                                                                challenge, raw_args))
+        unverified: list[str] = []
+        for reply in self.session.get(self.keys.lobby(self.user), payload=pack(message), timeout=self.timeout_s,
+                                      consolidation=zenoh.ConsolidationMode.NONE):
+            raw = (reply.ok if reply.ok is not None else reply.err).payload.to_bytes()
+            try:
+                body = open_sealed(server_key, raw, MAX_SERVER_MESSAGE_BYTES)
+            except (ProtocolError, SignatureError):
+                unverified.append(_describe_unverified(raw))
+                continue
+            if body.get("kind") != "reply" or body.get("server") != self.keys.server or body.get("nonce") != nonce \
+                    or body.get("op") != op:
+                unverified.append("a signed reply to another request")
+                continue
+            if body.get("ok") is True:
+                return body
+            raise ServerError(f"{op}: {body.get('error')}")
+        raise ServerGone(f"no reply signed by server {self.keys.server!r} ({server_key.text}) on "
+                         f"{self.keys.lobby(self.user)}" +
+                         (f"; {len(unverified)} unverified ({unverified[0]})" if unverified else ""))
+
+    def create(self, config: str | dict, match_id: str | None = None, **options: Any) -> dict:
+        """A new match (the admin role: the admin secret proves it). The reply's ``tickets`` map each slot
+        that needs one to its ticket (hex), for the bots the creator invites."""
+        args = {"config": config, **options}
+        if match_id is not None:
+            args["id"] = match_id
+        return self.request("create", args, prove_with=self.admin_secret())
+
+    def list(self) -> list[dict]:
+        return self.request("list")["matches"]
+
+    def inspect(self, match: str) -> dict:
+        return self.request("inspect", {"match": match})
+
+    def stop(self, match: str) -> dict:
+        return self.request("stop", {"match": match}, prove_with=self.admin_secret())
+
+    def join(self, match: str, slot: str | None = None, ticket: str | None = None, **fields: Any) -> JoinInfo:
+        """Take a slot (the named one or any this user may take); ``ticket``: the slot's ticket (hex) from
+        the match's creator, unless the match is open or the slot is this user's seat."""
+        exchange, nonce = KeyExchange(), random_bytes()
+        args = {"match": match, "slot": slot, "client_key": exchange.public_bytes, **fields}
+        reply = self.request("join", args, prove_with=parse_secret(ticket, "ticket") if ticket else None,
+                             nonce=nonce)
+        secret = exchange.slot_secret(reply["server_key_exchange"], nonce, self.keys.server, match, reply["slot"])
+        return JoinInfo.from_reply(reply, secret)
+
+    def rejoin(self, match: str, slot: str, secret: bytes) -> JoinInfo:
+        return JoinInfo.from_reply(self.request("rejoin", {"match": match, "slot": slot}, prove_with=secret), secret)
+
+    def leave(self, match: str, slot: str, secret: bytes) -> dict:
+        return self.request("leave", {"match": match, "slot": slot}, prove_with=secret)
+
+
+def _describe_unverified(raw: bytes) -> str:
+    try:
+        message = unpack(raw)
+    except ProtocolError:
+        return raw[:80].decode("utf-8", "replace")  # e.g. Zenoh's own "Timeout"
+    return str(message.get("error", "not signed by the server's key"))
+
+
+class SealedStream:
+    """The server's messages on one key, checked: signed by its key, of the expected kind, for this server,
+    match instance (and slot), and newer than the last one accepted (``seq``). Anything else is dropped
+    and counted in ``dropped`` by reason."""
+
+    def __init__(self, key: ServerKey, server: str, match: str, instance: str, kinds: tuple[str, ...],
+                 slot: str | None = None, dropped: Counter | None = None):
+        self.key, self.kinds = key, kinds
+        self.expected = {"server": server, "match": match, "instance": instance}
+        if slot is not None:
+            self.expected["slot"] = slot
+        self.last_seq = -1
+        self.dropped = dropped if dropped is not None else Counter()
+        self._lock = threading.Lock()
+
+    def open(self, payload: bytes) -> dict | None:
+        try:
+            body = open_sealed(self.key, payload, MAX_SERVER_MESSAGE_BYTES)
+        except SignatureError:
+            self.dropped["bad_signature"] += 1
+            return None
+        except ProtocolError:
+            self.dropped["malformed"] += 1
+            return None
+        if body.get("kind") not in self.kinds or any(body.get(k) != v for k, v in self.expected.items()):
+            self.dropped["wrong_stream"] += 1
+            return None
+        seq = body.get("seq")
+        with self._lock:
+            if isinstance(seq, bool) or not isinstance(seq, int) or seq <= self.last_seq:
+                self.dropped["stale"] += 1
+                return None
+            self.last_seq = seq
+        return body
+
+
+def resolve_client(client: ClientSettings | None, **fields: Any) -> ClientSettings:
+    """``client`` as given, else one built from keyword fields (``server=``, ``zenoh=``, ``server_key=``...)."""
+    if client is not None:
+        return client.replace(**{k: v for k, v in fields.items() if v is not None}) if any(
+            v is not None for v in fields.values()) else client
+    return ClientSettings.from_dict({k: v for k, v in fields.items() if v is not None})
+

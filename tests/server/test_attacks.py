@@ -1,0 +1,269 @@
+"""Issue 21's attacks, each by a hostile client in its own process (``hostile.py``: only msgpack, zenoh and
+cryptography) while real bots play a real match on loopback:
+
+- with Zenoh users and access control (the server is the peer holding the ACL; the hostile has its own
+  player credentials, and connects as a client, or as a peer to try eclipse-zenoh/zenoh#2137's bypass);
+- on the loopback default without any authentication, where only the protocol's own signatures and MACs
+  stand in the way (defence in depth), plus a forged liveliness token that tries to keep a killed bot
+  "connected";
+- a bounded flood of lobby requests and junk actions, and an admin who asks for too much.
+
+Outcomes are counted, never timed: no forged action reaches a car, no forged observation reaches a bot,
+no forged state or end reaches a spectator, no forged lobby reply is accepted, and the legitimate match
+keeps its decisions (missed decisions counted).
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sys
+import threading
+
+import pytest
+from server_helpers import HOSTILE, SHORT, Secure, wait_for
+
+from rocketdrl_ma.results import ResultsStore
+from rocketdrl_ma.server import PolicyBot, ServerError, Spectator
+from rocketdrl_ma.server.client import LobbyClient, trusted_server_key
+from rocketdrl_ma.server.spectator import MatchEnd, StateUpdate
+
+FORGED_ROLL = 1.0  # the hostile's forged action rolls; scripted bots never roll
+GAME = {**SHORT, "clock_s": 8.0}
+
+
+def start_hostile(procs, server: str, match: str, victim: str, slot: str, *extra: str):
+    p = procs.start([sys.executable, str(HOSTILE), "--server", server, "--match", match, "--victim", victim,
+                     "--slot", slot, *extra])
+    p.line("ready", 60)
+    return p
+
+
+def hostile_result(p, timeout_s: float = 120) -> dict:
+    assert p.wait(timeout_s) == 0, p.output()
+    return json.loads(p.line("result ").split(" ", 1)[1])
+
+
+class Watcher(threading.Thread):
+    """A spectator in a thread: every update it accepted, and what it dropped."""
+
+    def __init__(self, match: str, **client):
+        super().__init__()
+        self.spectator = Spectator(match, **client).open()
+        self.updates: list = []
+        self.error: BaseException | None = None
+
+    def run(self) -> None:
+        try:
+            self.updates = list(self.spectator.updates(timeout_s=120))
+        except BaseException as e:  # reported by the test
+            self.error = e
+        finally:
+            self.spectator.close()
+
+    def result(self) -> tuple[list[StateUpdate], MatchEnd]:
+        self.join(150)
+        assert self.error is None, self.error
+        states = [u for u in self.updates if isinstance(u, StateUpdate)]
+        return states, self.updates[-1]
+
+
+def play_both(alice: dict, bob: dict) -> dict:
+    """blue_0 (ball chaser) and orange_0 (goalie) as SDK bots in threads; their reports."""
+    reports, errors = {}, []
+
+    def run(slot, spec, kwargs):
+        try:
+            reports[slot] = PolicyBot(spec).run(kwargs.pop("match"), slot, **kwargs)
+        except BaseException as e:
+            errors.append(e)
+    threads = [threading.Thread(target=run, args=("blue_0", "scripted:ball_chaser", alice)),
+               threading.Thread(target=run, args=("orange_0", "scripted:goalie", bob))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(150)
+    assert not errors, errors
+    return reports
+
+
+def assert_no_forged_control(states: list[StateUpdate]) -> None:
+    rolls = [float(s.wire_state["last_controls"]["blue_0"][4]) for s in states]
+    assert rolls and FORGED_ROLL not in rolls
+
+
+@pytest.fixture(scope="module")
+def secure(tmp_path_factory):
+    s = Secure(tmp_path_factory.mktemp("secure"))
+    yield s
+    s.close()
+
+
+@pytest.mark.parametrize("mode", ["client", "peer"])
+def test_hostile_player_cannot_act_speak_or_decide_for_another(secure, procs, mode):
+    match = f"acl-{mode}"
+    created = secure.lobby("ops").create("matches/1v1.yaml", match, overrides=GAME, ready_timeout_s=60)
+    tickets = created["tickets"]
+    hostile = start_hostile(procs, "lab", match, "alice", "blue_0", "--config", secure.client_file("mallory"),
+                            "--mode", mode, "--rounds", "600", "--period-s", "0.005")
+    watcher = Watcher(match, client=secure.client("web"))
+    watcher.start()
+    reports = play_both({"match": match, "client": secure.client("alice"), "ticket": tickets["blue_0"]},
+                        {"match": match, "client": secure.client("bob"), "ticket": tickets["orange_0"]})
+    states, end = watcher.result()
+    got = hostile_result(hostile)
+    info = secure.lobby("ops").inspect(match)
+    assert info["status"] == "finished" and got["forged_acts"] == 600
+    # the real end, and every decision answered by its own bot, which never stopped early
+    assert isinstance(end, MatchEnd) and end.status == "finished" and end.result_key == info["result_key"]
+    assert end.summary == info["summary"] and states[-1].done
+    for slot, report in (("blue_0", reports["blue_0"]), ("orange_0", reports["orange_0"])):
+        assert report.reason == "finished" and report.summary == info["summary"]
+        assert info["slot_status"][slot]["received"] >= 0.9 * info["decision"], (info["slot_status"], info["rejected"])
+    assert_no_forged_control(states)
+    assert not reports["blue_0"].dropped and not watcher.spectator.dropped  # nothing forged even arrived
+    assert info["rejected"].get("bad_mac", 0) == 0  # the ACL dropped every forged action before the server
+    if mode == "client":
+        # the access control held completely: nothing of alice's reached mallory, nor any query
+        assert got["victim_samples"] == 0 and got["acts_sniffed"] == got["obs_sniffed"] == 0
+        assert got["alive_keys"] == [] and got["cloned_tokens"] == []
+        assert got["queries_received"] == 0 and got["key_queries_received"] == 0
+    # As a peer (eclipse-zenoh/zenoh#2137) mallory may see some of alice's traffic routed through the
+    # server; the outcomes above hold all the same. What she saw, for the record:
+    print(f"hostile {mode}: {json.dumps({k: v for k, v in got.items() if k != 'lobby_queries_seen'})}")
+
+
+def test_defence_in_depth_without_any_authentication(running, procs):
+    """The loopback default: no Zenoh users, so the hostile sees and may publish anything. Signatures,
+    MACs, sequence numbers and the verified lobby still stop every attack."""
+    running.lobby.create("matches/1v1.yaml", "open", overrides=GAME, ready_timeout_s=60)
+    hostile = start_hostile(procs, "test", "open", "guest", "blue_0", "--connect", running.endpoint,
+                            "--rounds", "600", "--period-s", "0.005")
+    # a client that trusts on first use now hears two different keys answer as 'test': it refuses both
+    tofu = running.client(key_dir="/nonexistent", server_key=None)
+    with pytest.raises(ValueError, match="2 different keys answer as server 'test'"):
+        trusted_server_key(running.session, tofu, timeout_s=2.0)
+    watcher = Watcher("open", client=running.client_settings)
+    watcher.start()
+    reports = play_both({"match": "open", "client": running.client_settings},
+                        {"match": "open", "client": running.client_settings})
+    states, end = watcher.result()
+    got = hostile_result(hostile)
+    info = running.lobby.inspect("open")
+    # the hostile did see and answer everything ...
+    assert got["acts_sniffed"] > 0 and got["obs_sniffed"] > 0 and got["replayed_acts"] > 0
+    assert got["queries_received"] > 0 and got["key_queries_received"] > 0
+    # ... yet every join went to the real server, and nothing forged was used
+    assert end.status == "finished" and end.result_key == info["result_key"] != "forged"
+    assert end.summary == info["summary"] and end.summary["score"] != {"blue": 7, "orange": 0}
+    assert watcher.spectator.dropped["bad_signature"] > 0 and watcher.spectator.dropped["malformed"] > 0
+    blue = reports["blue_0"]
+    assert blue.reason == "finished" and blue.summary == info["summary"]
+    assert blue.dropped["bad_signature"] > 0 and blue.dropped["malformed"] > 0  # forged and unsigned `done`s
+    assert sum(blue.dropped.values()) >= got["forged_obs"] // 4
+    assert_no_forged_control(states)
+    assert info["rejected"]["bad_mac"] > 0  # the forged actions reached the server and were refused
+    slot = info["slot_status"]["blue_0"]
+    assert slot["received"] + slot["missed"] + slot["disconnected"] == info["decision"]  # replays never count
+    assert slot["received"] >= 0.9 * info["decision"]
+    assert {s.decision for s in states} <= set(range(info["decision"] + 1))
+    [result] = ResultsStore(running.results).results()
+    assert (result.score_blue, result.score_orange) == (end.summary["score"]["blue"], end.summary["score"]["orange"])
+
+
+@pytest.mark.slow
+def test_forged_liveliness_cannot_keep_a_killed_bot_connected(running, procs):
+    running.lobby.create("matches/1v1.yaml", "alive", overrides={**SHORT, "clock_s": 40.0}, ready_timeout_s=120,
+                         deadline_ms=100)
+    hostile = start_hostile(procs, "test", "alive", "guest", "blue_0", "--connect", running.endpoint,
+                            "--rounds", "2500", "--period-s", "0.01")
+    blue = procs.bot(running, "alive", "blue_0")
+    # orange answers every decision 25 ms late (within the deadline): it sets a pace a test can follow
+    procs.botproc(running, "alive", ["orange_0"], "--delay-ms", "25")
+    slot = lambda: running.lobby.inspect("alive")["slot_status"]["blue_0"]  # noqa: E731
+    wait_for(lambda: slot()["received"] >= 20, 60, "blue to play 20 decisions")
+    os.kill(blue.pid, signal.SIGKILL)
+    # the hostile holds a copy of blue's liveliness token: blue still looks alive, but after the streak of
+    # missed decisions the match stops waiting for it
+    stalled = wait_for(lambda: (lambda s: s if s["stalled"] else None)(slot()), 60, "blue_0 to count as gone")
+    assert stalled["alive"] and not stalled["connected"]
+    streak = running.server.settings.limits.missed_streak
+    assert stalled["missed"] == streak
+    wait_for(lambda: slot()["disconnected"] >= 20, 60, "decisions after the streak")
+    after = slot()
+    assert after["missed"] == streak and after["alive"]  # no more waiting for it, token or not
+    got = hostile_result(hostile, 180)
+    assert any("/u/guest/match/alive/blue_0/alive/" in k for k in got["cloned_tokens"]), got["cloned_tokens"]
+    info = running.wait_status("alive", timeout_s=180)
+    assert info["slot_status"]["orange_0"]["missed"] <= 0.1 * info["decision"]
+
+
+def test_bounded_flood_and_greedy_admin_leave_a_running_match_alone(secure, procs):
+    ops = secure.lobby("ops")
+    created = ops.create("matches/1v1.yaml", "flood", overrides=GAME, ready_timeout_s=60)
+    hostile = start_hostile(procs, "lab", "flood", "alice", "blue_0", "--config", secure.client_file("mallory"),
+                            "--rounds", "0", "--flood", "3000")
+    reports = play_both({"match": "flood", "client": secure.client("alice"), "ticket": created["tickets"]["blue_0"]},
+                        {"match": "flood", "client": secure.client("bob"), "ticket": created["tickets"]["orange_0"]})
+    got = hostile_result(hostile)
+    info = ops.inspect("flood")
+    assert got["lobby_flood"] == got["act_flood"] == 3000
+    # the match kept its decisions: each bot answered (nearly) all of them, none was dropped for load
+    assert info["status"] == "finished" and all(r.reason == "finished" for r in reports.values())
+    for slot in ("blue_0", "orange_0"):
+        assert info["slot_status"][slot]["missed"] <= 0.1 * info["decision"], info["slot_status"]
+    assert secure.server.requests_limited > 0  # the rate limit answered for the flood, unsigned
+    assert {m["creator"] for m in ops.list()} == {"ops"}  # a player's creates never made a match
+    # an admin gets at most max_matches_per_user waiting or running matches, each within the bounds
+    limits = secure.server.settings.limits
+    live = sum(m["status"] in ("waiting", "running") for m in ops.list())
+    for i in range(limits.max_matches_per_user - live):
+        ops.create("matches/4v4.yaml", f"greedy{i}", ready_timeout_s=600, fill="idle")
+    with pytest.raises(ServerError, match="limit: user 'ops' already has"):
+        ops.create("matches/4v4.yaml", "one-too-many", fill="idle")
+    for bad, message in [({"overrides": {"clock_s": 1e9}}, "clock_s: 1000000000.0 is outside"),
+                         ({"ready_timeout_s": 1e12}, "ready_timeout_s"),
+                         ({"fill": "checkpoint:/etc/passwd"}, "fill: 'checkpoint:/etc/passwd' is not allowed")]:
+        with pytest.raises(ServerError, match=message):
+            ops.create("matches/1v1.yaml", "bad", **bad)
+    for i in range(limits.max_matches_per_user - live):
+        ops.stop(f"greedy{i}")
+
+
+@pytest.mark.parametrize("config", ["/proc/self/environ", "../../../../etc/passwd", "matches/../../../etc/hosts.yaml",
+                                    "matches/nope.yaml", "policies/selfplay_1v1.yaml"])
+def test_create_never_reads_or_describes_the_servers_files(running, config):
+    with pytest.raises(ServerError) as refused:
+        running.lobby.create(config, "disk")
+    text = str(refused.value)
+    assert "/work" not in text and "/etc" not in text.replace(repr(config), "") and "environ" not in \
+        text.replace(repr(config), "")
+    assert "no such file" not in text and "looked in" not in text
+    assert running.lobby.list() == []
+
+
+def test_a_forged_lobby_reply_never_seats_a_bot(running):
+    """A queryable that answers first in the server's name, signed with another key: the join still goes
+    to the real server, and a client that only hears forged replies says so."""
+    import msgpack
+    from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
+    running.lobby.create("matches/1v1.yaml", "imp", ready_timeout_s=60)
+    impostor_key = Ed25519PrivateKey.generate()
+
+    def impostor(query) -> None:
+        body = msgpack.packb({"kind": "reply", "server": "test", "op": "join", "ok": True, "slot": "blue_0"},
+                             use_bin_type=True)
+        query.reply(query.key_expr, msgpack.packb({"v": 2, "body": body, "sig": impostor_key.sign(body)}))
+
+    fake = running.session.declare_queryable(running.server.keys.lobby("guest"), impostor)
+    try:
+        join = running.lobby.join("imp", "blue_0")
+        assert join.instance == running.lobby.inspect("imp")["instance"]
+        assert running.lobby.inspect("imp")["slot_status"]["blue_0"]["occupant"] == "remote"
+        other = LobbyClient(running.session, running.client(server="nobody", server_key=running.lobby.server_key.text))
+        fake2 = running.session.declare_queryable("rocketdrl/nobody/u/guest/lobby", impostor)
+        with pytest.raises(Exception, match="no reply signed by server 'nobody'.*unverified"):
+            other.list()
+        fake2.undeclare()
+    finally:
+        fake.undeclare()
