@@ -72,16 +72,18 @@ def _announced_keys(session, client: ClientSettings, timeout_s: float) -> set[Se
     return found
 
 
-def trusted_server_key(session, client: ClientSettings, timeout_s: float = 5.0) -> ServerKey:
-    """The key to verify this server's messages with (see the module docstring for the order)."""
+def trusted_server_key(session, client: ClientSettings, timeout_s: float = 5.0) -> tuple[ServerKey, str]:
+    """The key to verify this server's messages with (see the module docstring for the order), and where
+    it came from."""
     if client.server_key is not None:
-        return ServerKey.parse(client.server_key)
+        return ServerKey.parse(client.server_key), "pinned"
     pub = client.keys_path / "server.pub"
     if pub.is_file():
-        return ServerKey.parse(pub.read_text().strip(), str(pub))
+        return ServerKey.parse(pub.read_text().strip(), str(pub)), str(pub)
     known = _read_known(client)
     if known is not None:
-        return ServerKey.parse(known, f"{client.known_servers_path} ({_known_key(client)})")
+        where = f"{client.known_servers_path} ({_known_key(client)})"
+        return ServerKey.parse(known, where), f"remembered in {where}: remove that line if the server's key changed"
     if not client.trust_on_first_use:
         raise ValueError(f"server_key: no key pinned for server {client.server!r}; pass --server-key (printed by "
                          "`rocketdrl-ma serve`) or allow trust_on_first_use")
@@ -98,7 +100,7 @@ def trusted_server_key(session, client: ClientSettings, timeout_s: float = 5.0) 
     with open(path, "a") as f:
         f.write(f"{_known_key(client)} {key.text}\n")
     log.warning("trusting server %r key %s on first use (remembered in %s)", client.server, key.text, path)
-    return key
+    return key, f"trusted on first use, remembered in {path}"
 
 
 @dataclass
@@ -150,11 +152,12 @@ class LobbyClient:
         self.client = client if client is not None else ClientSettings.from_dict(client_fields)
         self.keys, self.user, self.timeout_s = Keys(self.client.server), self.client.user_name, timeout_s
         self._server_key: ServerKey | None = None
+        self.key_source = ""
 
     @property
     def server_key(self) -> ServerKey:
         if self._server_key is None:
-            self._server_key = trusted_server_key(self.session, self.client, self.timeout_s)
+            self._server_key, self.key_source = trusted_server_key(self.session, self.client, self.timeout_s)
         return self._server_key
 
     def admin_secret(self) -> bytes | None:
@@ -194,8 +197,8 @@ class LobbyClient:
             if body.get("ok") is True:
                 return body
             raise ServerError(f"{op}: {body.get('error')}")
-        raise ServerGone(f"no reply signed by server {self.keys.server!r} ({server_key.text}) on "
-                         f"{self.keys.lobby(self.user)}" +
+        raise ServerGone(f"no reply signed by server {self.keys.server!r} ({server_key.text}, {self.key_source}) "
+                         f"on {self.keys.lobby(self.user)}" +
                          (f"; {len(unverified)} unverified ({unverified[0]})" if unverified else ""))
 
     def create(self, config: str | dict, match_id: str | None = None, **options: Any) -> dict:

@@ -147,8 +147,10 @@ def make_keys(config: str, tls_hosts: list[str] | None = None, connect: list[str
         client = {"server": server.name, "server_key": identity.public_text, "zenoh": zenoh}
         if role == "admin":
             client["admin_secret"] = admin_secret.hex()
-        header = (f"# {user} ({role}) on match server {server.name!r}: a private file, for {user} only.\n"
-                  f"# rocketdrl-ma bot --config {path.name} --policy scripted:ball_chaser --match M --ticket T\n")
+        use = {"admin": f"rocketdrl-ma lobby create matches/1v1.yaml --id M --config {path.name}",
+               "player": f"rocketdrl-ma bot --config {path.name} --policy scripted:ball_chaser --match M --ticket T",
+               "spectator": f"rocketdrl-ma watch M --config {path.name}"}[role]
+        header = f"# {user} ({role}) on match server {server.name!r}: a private file, for {user} only.\n# {use}\n"
         write_private(path, (header + yaml.safe_dump(client, sort_keys=False)).encode())
         made.append(f"client config for {user} ({role}): {path}")
     return made

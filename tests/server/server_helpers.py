@@ -54,8 +54,8 @@ class Running:
     """An in-process server plus a client session and lobby client talking to it (as user ``guest``, with
     the admin secret from the server's key dir)."""
 
-    def __init__(self, tmp_path: Path, name: str = "test", **extra):
-        self.endpoint = free_endpoint()
+    def __init__(self, tmp_path: Path, name: str = "test", endpoint: str | None = None, **extra):
+        self.endpoint = endpoint or free_endpoint()
         self.name = name
         self.results = tmp_path / "results.sqlite"
         self.key_dir = tmp_path / "keys"

@@ -143,6 +143,8 @@ def test_defence_in_depth_without_any_authentication(running, procs):
     tofu = running.client(key_dir="/nonexistent", server_key=None)
     with pytest.raises(ValueError, match="2 different keys answer as server 'test'"):
         trusted_server_key(running.session, tofu, timeout_s=2.0)
+    known = tofu.known_servers_path
+    assert not known.is_file() or running.endpoint not in known.read_text()  # and remembered neither
     watcher = Watcher("open", client=running.client_settings)
     watcher.start()
     reports = play_both({"match": "open", "client": running.client_settings},
