@@ -10,13 +10,15 @@ forges observations for it (signed with its own key, a forged ``done``) and repl
 the match's state, events and final message; answers lobby and key queries in the server's name (a
 forged join reply, a forged error); declares liveliness tokens on every bot key it learns and on the
 server's. ``--flood N`` also sends N lobby requests (create, join, list) and N junk actions as fast as it
-can. It starts by printing ``ready`` once its subscriptions and queryables are declared.
+can. It starts by printing ``ready`` once its subscriptions and queryables are declared; SIGTERM ends the
+rounds early (the result is still printed).
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import signal
 import sys
 import threading
 import time
@@ -135,11 +137,15 @@ def main() -> int:
         session.declare_queryable(f"{root}/key", forged_key),
         *(session.liveliness().declare_token(key) for key in sorted(own_tokens)),
     ]
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
     print("ready", flush=True)
     cloned: dict[str, object] = {}
     sent = {"forged_acts": 0, "replayed_acts": 0, "forged_obs": 0, "replayed_obs": 0, "forged_public": 0,
             "lobby_flood": 0, "act_flood": 0}
     for round_ in range(args.rounds):
+        if stop.is_set():
+            break
         body = msgpack.packb({"match": match, "slot": slot, "decision": round_,
                               "action": [-1.0, 1, 1, 1, 1, 1, 1, 1]}, use_bin_type=True)
         put(f"{victim_slot}/act", pack({"body": body, "mac": os.urandom(32)}))
