@@ -280,9 +280,9 @@ class SealedStream:
 
 
 def resolve_client(client: ClientSettings | None, **fields: Any) -> ClientSettings:
-    """``client`` as given, else one built from keyword fields (``server=``, ``zenoh=``, ``server_key=``...)."""
-    if client is not None:
-        return client.replace(**{k: v for k, v in fields.items() if v is not None}) if any(
-            v is not None for v in fields.values()) else client
-    return ClientSettings.from_dict({k: v for k, v in fields.items() if v is not None})
-
+    """``client`` (default: a loopback client of ``local``) with the given keyword fields replaced
+    (``server=``, ``zenoh=``, ``user=``, ``server_key=``...; None leaves a field as it is)."""
+    changes = {k: v for k, v in fields.items() if v is not None}
+    if client is None:
+        return ClientSettings.from_dict(changes)
+    return client.replace(**changes) if changes else client

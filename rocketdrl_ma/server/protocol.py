@@ -160,14 +160,20 @@ def pack_value(value: Any) -> bytes:
     return msgpack.packb(value, default=_default, use_bin_type=True)
 
 
+def _map_header(n: int) -> bytes:
+    return bytes([0x80 | n]) if n <= 15 else b"\xde" + n.to_bytes(2, "big") if n < 1 << 16 else \
+        b"\xdf" + n.to_bytes(4, "big")
+
+
 def pack_map(message: dict, raw: dict[str, bytes] | None = None) -> bytes:
     """A msgpack map of ``message`` plus values already packed (``raw``: key -> msgpack bytes). The result
-    is an ordinary msgpack map."""
-    raw = raw or {}
-    n = len(message) + len(raw)
-    parts = [bytes([0x80 | n]) if n <= 15 else b"\xde" + n.to_bytes(2, "big")]
-    for key, value in message.items():
-        parts += [msgpack.packb(key), pack_value(value)]
+    is an ordinary msgpack map: ``message`` packed in one call, its header rewritten to count ``raw`` too."""
+    packed = pack_value(message)
+    if not raw:
+        return packed
+    head = packed[0]
+    skip = 1 if head & 0xF0 == 0x80 else 3 if head == 0xDE else 5
+    parts = [_map_header(len(message) + len(raw)), packed[skip:]]
     for key, value in raw.items():
         parts += [msgpack.packb(key), value]
     return b"".join(parts)

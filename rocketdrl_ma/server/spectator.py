@@ -20,7 +20,7 @@ from typing import Any, Iterator, Union
 
 from rocketdrl_ma.rules.state import GameState
 
-from .client import LobbyClient, SealedStream, ServerError, ServerGone, resolve_client
+from .client import LobbyClient, SealedStream, ServerError, resolve_client
 from .protocol import Keys, decode_state
 from .settings import ClientSettings
 
@@ -148,10 +148,6 @@ class Spectator:
 
     def __exit__(self, *exc) -> None:
         self.close()
-
-    @property
-    def ended(self) -> MatchEnd | None:
-        return self._ended
 
     def _check_server(self) -> MatchEnd | None:
         """The server's liveliness token went away (anyone may drop one on that key): ask the lobby."""
