@@ -75,6 +75,9 @@ def _run_serve(args: argparse.Namespace) -> int:
                   else "no Zenoh authentication: anyone who reaches the endpoint may play open matches")
         print(f"server key {server.identity.public_text} (clients pin it with --server-key); admin secret in "
               f"{settings.keys_path / 'admin.secret'}; {access}", flush=True)
+        for match in list(server.matches.values()):  # the config's own matches: their tickets, for the operator
+            for slot, ticket in match.tickets.items():
+                print(f"match {match.id}: ticket {slot} {ticket}", flush=True)
         stop.wait()
     return 0
 

@@ -39,13 +39,16 @@ def test_serve_lobby_watch_and_bots_as_commands(procs, tmp_path, checkpoint):
                              *client))
     assert create.wait(60) == 0, create.output()
     assert create.line("created match M (lockstep, slots ['blue_0', 'orange_0'])")
+    tickets = {line.split()[1]: line.split()[2] for line in create.lines if line.startswith("ticket ")}
+    assert set(tickets) == {"blue_0", "orange_0"}  # server/local.yaml: a slot needs its ticket
     video, replay = tmp_path / "match.mp4", tmp_path / "match.npz"
     watch = procs.start(cli("watch", "M", "--video", str(video), "--replay", str(replay), "--timeout", "300",
                             *client))
     watch.line("watching match M", 60)
-    blue = procs.start(cli("bot", "--policy", "scripted:ball_chaser", "--match", "M", "--slot", "blue_0", *client))
+    blue = procs.start(cli("bot", "--policy", "scripted:ball_chaser", "--match", "M", "--slot", "blue_0",
+                           "--ticket", tickets["blue_0"], *client))
     orange = procs.start(cli("bot", "--policy", f"checkpoint:{checkpoint}", "--name", "tiny-ppo", "--match", "M",
-                             *client))  # any open slot: orange_0
+                             "--ticket", tickets["orange_0"], *client))  # the slot its ticket opens: orange_0
     assert orange.line("joined match M as orange_0")
     for bot in (blue, orange):
         assert bot.wait(120) == 0, bot.output()

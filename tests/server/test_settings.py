@@ -15,7 +15,7 @@ def test_shipped_configs_load_and_are_secure(monkeypatch):
     monkeypatch.chdir(REPO)  # the router YAML names the server YAML by its path from the repository
     local = ServerSettings.load("server/local.yaml")
     assert local.zenoh.mode == "peer" and local.zenoh.listen_endpoints() == ("tcp/127.0.0.1:7447",)
-    assert not local.zenoh.multicast and local.match_defaults.deadline_ms == 50 and local.match_defaults.open
+    assert not local.zenoh.multicast and local.match_defaults.deadline_ms == 50 and not local.match_defaults.open
     assert not local.access.enabled and str(local.keys_path) == "runs/server/local"
     lan = ServerSettings.load("server/lan.yaml")
     assert lan.zenoh.mode == "peer" and lan.access.enabled and not lan.match_defaults.open
