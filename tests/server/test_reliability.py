@@ -15,7 +15,7 @@ import pytest
 from server_helpers import SHORT, RawBot, wait_for
 
 from rocketdrl_ma.results import ResultsStore
-from rocketdrl_ma.server import LobbyClient
+from rocketdrl_ma.server import LobbyClient, ServerError
 from rocketdrl_ma.server.crypto import random_bytes
 from rocketdrl_ma.server.protocol import PROTOCOL_VERSION, action_message, open_sealed, pack
 
@@ -158,6 +158,7 @@ def served(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("served")
     config = yaml.safe_load((REPO / "server/local.yaml").read_text())
     config["limits"] = {"requests_per_s": 0}  # the churn test sends thousands of lobby requests at once
+    config["matches"] = [{"id": "duel", "config": "matches/1v1.yaml", "ready_timeout_s": 3600}]
     (tmp / "server.yaml").write_text(yaml.safe_dump(config))
     served = procs.serve(tmp, name="sub", config=str(tmp / "server.yaml"))
     session = served.client_settings.zenoh.open()
@@ -173,6 +174,16 @@ def test_server_listens_on_loopback_only(served):
     assert listening, "the server should listen somewhere"
     assert all(c.laddr.ip in ("127.0.0.1", "::1") for c in listening), listening
     assert any(c.laddr.port == int(endpoint.rsplit(":", 1)[1]) for c in listening)
+
+
+def test_serve_prints_the_tickets_of_its_own_matches(served):
+    proc, _, lobby = served
+    tickets = dict(line.split()[3:5] for line in proc.lines if line.startswith("match duel: ticket "))
+    assert set(tickets) == {"blue_0", "orange_0"}
+    with pytest.raises(ServerError, match="reserved: join with its ticket"):
+        lobby.join("duel", "orange_0")
+    join = lobby.join("duel", "orange_0", ticket=tickets["orange_0"])
+    lobby.leave("duel", join.slot, join.secret)
 
 
 def test_join_leave_cycles_do_not_leak(served):
