@@ -59,16 +59,19 @@ def play_local(cfg: LeagueConfig, match: ScheduledMatch) -> MatchResult:
         env.close()
 
 
-def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session) -> MatchResult:
+def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session, client=None) -> MatchResult:
     """A match on the match server: remote players are invited (``remote.invite``), the others join as
-    ``PolicyBot``s from this process; the result is read back from the lobby once the match ends."""
+    ``PolicyBot``s from this process; the result is read back from the lobby once the match ends.
+    ``client``: how this process is known to the server and trusts it (a ``ClientSettings``; default: the
+    server's name, unauthenticated, its key and admin secret from its key dir on this machine)."""
     from rocketdrl_ma.server.bot import PolicyBot
-    from rocketdrl_ma.server.client import LobbyClient
+    from rocketdrl_ma.server.client import LobbyClient, resolve_client
 
     from .remote import invite
 
     link = cfg.server
-    lobby = LobbyClient(session, server=link.name)
+    client = resolve_client(client, server=link.name)
+    lobby = LobbyClient(session, client)
     slots = slot_players(cfg, match)
     remote: dict[str, list[str]] = {}
     for slot, (name, spec) in slots.items():
@@ -90,7 +93,7 @@ def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session) -> MatchRe
 
     def run_bot(slot: str, name: str, spec: str) -> None:
         try:
-            PolicyBot(spec, name=name).run(match_id, slot, server=link.name, session=session)
+            PolicyBot(spec, name=name).run(match_id, slot, client=client, session=session)
         except BaseException as e:  # reported by the league thread below
             errors.append(e)
 

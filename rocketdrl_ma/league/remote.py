@@ -47,9 +47,13 @@ def invite(session, server: str, entrant: str, match_id: str, slots: list[str],
 
 def serve_invitations(session, server: str, entrant: str, make_bot: Callable[[], object],
                       max_matches: int | None = None, stop: threading.Event | None = None,
-                      on_match: Callable[[str, list], None] | None = None) -> int:
+                      on_match: Callable[[str, list], None] | None = None, client=None) -> int:
     """Play every match the league invites ``entrant`` to (``make_bot()`` -> a fresh ``Bot`` per car) until
-    ``max_matches`` were played or ``stop`` is set; the number of matches played."""
+    ``max_matches`` were played or ``stop`` is set; the number of matches played. ``client``: a
+    ``ClientSettings`` for the server (its user must be ``entrant``; default: unauthenticated, as it)."""
+    from rocketdrl_ma.server.client import resolve_client
+
+    client = resolve_client(client, server=server, user=entrant)
     invitations: queue.Queue = queue.Queue()
     stop = stop or threading.Event()
 
@@ -77,7 +81,7 @@ def serve_invitations(session, server: str, entrant: str, make_bot: Callable[[],
             # Not daemon threads: Zenoh runs the callbacks a thread declares on a Python thread of the same
             # daemon-ness, and a daemon one may wake in interpreter shutdown and abort the process.
             threads = [threading.Thread(target=lambda s=slot: reports.append(
-                make_bot().run(match_id, s, server=server, session=session, user=entrant))) for slot in slots]
+                make_bot().run(match_id, s, client=client, session=session))) for slot in slots]
             for t in threads:
                 t.start()
             for t in threads:
