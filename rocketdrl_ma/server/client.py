@@ -147,9 +147,13 @@ def parse_rejoin_token(token: str) -> tuple[str, bytes]:
 class LobbyClient:
     """Lobby requests over an open Zenoh session; only replies signed by the server's key count."""
 
-    def __init__(self, session, client: ClientSettings | None = None, timeout_s: float = 5.0, **client_fields):
+    def __init__(self, session, client: ClientSettings | str | None = None, timeout_s: float = 5.0,
+                 **client_fields):
+        """``client``: a ``ClientSettings``, or just the server's name (its other fields as keywords)."""
         self.session = session
-        self.client = client if client is not None else ClientSettings.from_dict(client_fields)
+        if isinstance(client, str):
+            client, client_fields = None, {**client_fields, "server": client}
+        self.client = resolve_client(client, **client_fields)
         self.keys, self.user, self.timeout_s = Keys(self.client.server), self.client.user_name, timeout_s
         self._server_key: ServerKey | None = None
         self.key_source = ""
