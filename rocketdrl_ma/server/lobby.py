@@ -263,6 +263,7 @@ class MatchServer:
             return
         op, nonce = None, b""
         try:
+            check_name("user", user)  # a wildcard query (u/*/lobby) names no user
             payload = query.payload
             if payload is None:
                 raise ProtocolError("message: the lobby needs a msgpack request as the query payload")

@@ -22,9 +22,9 @@ from rocketdrl_ma.server.crypto import random_bytes
 from rocketdrl_ma.server.protocol import open_sealed, pack, pack_value
 
 
-def raw_query(running, payload: bytes, user: str = "guest") -> tuple[bool, dict] | None:
+def raw_query(running, payload: bytes, user: str = "guest", timeout_s: float = 5.0) -> tuple[bool, dict] | None:
     """One lobby get with an arbitrary payload: (ok, verified reply body), or None without any reply."""
-    for reply in running.session.get(running.server.keys.lobby(user), payload=payload, timeout=5.0):
+    for reply in running.session.get(running.server.keys.lobby(user), payload=payload, timeout=timeout_s):
         if reply.ok is not None:
             return True, open_sealed(running.lobby.server_key, reply.ok.payload.to_bytes(), 1 << 24)
         raw = reply.err.payload.to_bytes()
@@ -79,10 +79,12 @@ def test_bad_requests_get_signed_error_replies_and_the_server_goes_on(running):
     assert not ok and reply["error"].startswith("op 'create': needs the admin secret")
     ok, reply = raw_query(running, pack({"op": "list", "nonce": random_bytes(), "args": {"not": "bin"}}))
     assert not ok and reply["error"].startswith("args:")
-    assert running.server.requests_rejected == 6
+    ok, reply = raw_query(running, request("list"), user="*")  # a wildcard query asks as nobody
+    assert not ok and reply["error"].startswith("user: expected 1-64 letters")
+    assert running.server.requests_rejected == 7
     # 10 MB is over what Zenoh itself reassembles for the server (max_message_size): dropped unread
-    assert raw_query(running, b"\x00" * (10 * 1024 * 1024)) is None
-    assert running.server.requests_rejected == 6
+    assert raw_query(running, b"\x00" * (10 * 1024 * 1024), timeout_s=1.0) is None
+    assert running.server.requests_rejected == 7
     nonce = random_bytes()
     ok, reply = raw_query(running, pack({"op": "list", "nonce": nonce, "args": pack_value({})}))
     assert ok and reply["matches"] == [] and reply["nonce"] == nonce and reply["op"] == "list"
