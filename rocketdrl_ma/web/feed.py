@@ -1,19 +1,20 @@
 """The page server's one door to the Zenoh network: it lists a server's matches and the training runs that
 publish evaluation episodes, and follows one of them (its states and events), read-only.
 
-Nothing else in ``rocketdrl_ma.web`` touches Zenoh keys or payloads: when the match server offers a
-verified spectator API (signed states and events, authenticated spectators), this module is what changes.
-A follower keeps only the newest state (the page shows at most ``max_rate`` states a second, decoded on
-``poll``) but every event, so throttling never loses a goal.
+Nothing else in ``rocketdrl_ma.web`` touches Zenoh keys or payloads. A match's states and events are
+signed by its server: a follower shows only those that verify against the server's key, for that match
+instance, in order (``rocketdrl_ma.server.client.SealedStream``). A follower shows only the newest state
+(the page shows at most ``max_rate`` states a second, decoded on ``poll``) but every event, so
+throttling never loses a goal.
 """
 from __future__ import annotations
 
 import threading
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 from rocketdrl_ma.rules.state import GameState
-from rocketdrl_ma.server.bot import LobbyClient, ServerError, ServerGone
+from rocketdrl_ma.server.client import LobbyClient, SealedStream, ServerError, ServerGone
 from rocketdrl_ma.server.protocol import Keys, ProtocolError, check_name, decode_state, unpack
 from rocketdrl_ma.server.settings import ZenohSettings
 
@@ -22,6 +23,23 @@ from .training import TrainingKeys
 SOURCE_KINDS = ("match", "train")
 #: the largest state or events message decoded; anything bigger is dropped
 MAX_STATE_BYTES = 16 * 1024 * 1024
+#: unread state payloads kept between polls: the newest one that opens is shown
+KEPT_STATES = 64
+
+
+def _plain(payload: bytes, kind: str) -> dict | None:
+    """A training run's message (not signed: a run is no match result)."""
+    try:
+        return unpack(payload, MAX_STATE_BYTES)
+    except ProtocolError:
+        return None
+
+
+def _sealed(lobby: LobbyClient, info: dict) -> Callable[[bytes, str], dict | None]:
+    """A match's messages: signed by its server for this match instance, newer than the last one."""
+    streams = {kind: SealedStream(lobby.server_key, lobby.keys.server, info["id"], info["instance"], (kind,))
+               for kind in ("state", "events")}
+    return lambda payload, kind: streams[kind].open(payload)
 
 
 @dataclass
@@ -49,8 +67,9 @@ class Follower:
 
     def __init__(self, session, state_key: str, events_key: str):
         self.info: dict = {}  # a match's lobby ``inspect`` reply when it was followed
+        self.opener: Callable[[bytes, str], dict | None] = _plain  # a payload as a message, or None: dropped
         self._lock = threading.Lock()
-        self._latest: bytes | None = None
+        self._states: list[bytes] = []
         self._events: list[bytes] = []
         self._declared = [session.declare_subscriber(state_key, self._on_state),
                           session.declare_subscriber(events_key, self._on_events)]
@@ -58,7 +77,8 @@ class Follower:
     def _on_state(self, sample) -> None:
         payload = sample.payload.to_bytes()
         with self._lock:
-            self._latest = payload
+            self._states.append(payload)
+            del self._states[:-KEPT_STATES]
 
     def _on_events(self, sample) -> None:
         payload = sample.payload.to_bytes()
@@ -67,23 +87,26 @@ class Follower:
 
     def poll(self) -> FeedUpdate:
         with self._lock:
-            latest, raw_events, self._latest, self._events = self._latest, self._events, None, []
+            raw_states, raw_events, self._states, self._events = self._states, self._events, [], []
         errors, state, events, final = 0, None, [], None
-        if latest is not None:
+        for raw in reversed(raw_states):  # the newest state that opens; older ones are not shown anyway
+            message = self.opener(raw, "state")
+            if message is None:
+                errors += 1
+                continue
             try:
-                message = unpack(latest, MAX_STATE_BYTES)
                 slots = message.get("slots") or {}
                 state = LiveState(decode_state(message["state"]), dict(message.get("scoreboard") or {}),
                                   str(message.get("status", "running")), int(message.get("decision", 0)),
                                   {slot: str(s.get("bot") or s.get("occupant") or slot) for slot, s in slots.items()
                                    if isinstance(s, dict)},
                                   dict(message.get("info") or {}))
+                break
             except (ProtocolError, KeyError, TypeError, ValueError):
                 errors += 1
         for raw in raw_events:
-            try:
-                message = unpack(raw, MAX_STATE_BYTES)
-            except ProtocolError:
+            message = self.opener(raw, "events")
+            if message is None:
                 errors += 1
                 continue
             if message.get("final"):
@@ -145,9 +168,11 @@ class SpectatorFeed:
             # subscribed first, then asked: a match that ends in between still shows its end
             follower = Follower(self.session, self.keys.state(source_id), self.keys.events(source_id))
             try:  # a match the server does not know is an error now, not a page that waits forever
-                follower.info = LobbyClient(self.session, self.server, self.lobby_timeout_s).inspect(source_id)
+                lobby = LobbyClient(self.session, self.server, self.lobby_timeout_s)
+                follower.info = lobby.inspect(source_id)
             except (ServerGone, ServerError) as e:
                 follower.close()
                 raise ValueError(str(e)) from None
+            follower.opener = _sealed(lobby, follower.info)
             return follower
         return Follower(self.session, self.training_keys.state(source_id), self.training_keys.events(source_id))
