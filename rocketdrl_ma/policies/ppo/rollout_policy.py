@@ -17,9 +17,10 @@ parameter or a buffer, and reaches the env as keys the module writes next to ``a
 from __future__ import annotations
 
 import torch
-from tensordict import TensorDict, TensorDictBase
+from tensordict import TensorDictBase
 from tensordict.nn import TensorDictModuleBase
 from torch import nn
+from torchrl.envs.utils import ExplorationType, exploration_type
 
 from .model import PPOModel, sample_env_actions
 
@@ -41,31 +42,34 @@ class RolloutPolicy(TensorDictModuleBase):
         self.out_keys = ["action", "action_log_prob", "ctl_difficulty", "ctl_kickstart", "policy_version"] + (
             ["opponent_id", "opponent_generation", "opponent_action"] if self.selfplay else [])
 
-    @property
-    def actor(self):
-        # built on demand (not a registered submodule): the state dict stays the model's and the buffers'
-        if getattr(self, "_actor", None) is None:
-            object.__setattr__(self, "_actor", self.model.td_modules()[0])
-        return self._actor
-
-    def __getstate__(self):
-        state = self.__dict__.copy()
-        state.pop("_actor", None)
-        return state
-
     @torch.no_grad()
     def forward(self, tensordict: TensorDictBase) -> TensorDictBase:
         rows = tensordict.batch_size
-        x = self.model.obs_norm(tensordict.get("observation"))
-        sampled = self.actor(TensorDict({"observation": x}, batch_size=rows))
-        tensordict.set("action", sampled.get("action"))
-        tensordict.set("action_log_prob", sampled.get("action_log_prob"))
+        action, log_prob = self.sample(self.model.obs_norm(tensordict.get("observation")))
+        tensordict.set("action", action)
+        tensordict.set("action_log_prob", log_prob)
         tensordict.set("ctl_difficulty", self.difficulty.expand(rows).clone())
         tensordict.set("ctl_kickstart", self.kickstart.expand(rows).clone())
         tensordict.set("policy_version", self.version.expand(rows).clone())
         if self.selfplay:
             self._opponents(tensordict)
         return tensordict
+
+    def sample(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """The learner's action and its log-probability for normalised inputs ``x``: the distributions of the
+        model's torchrl actor (``PPOModel.td_modules``, which ``ClipPPOLoss`` scores), built here without its
+        tensordict plumbing, which cost as much as the rest of a worker's decision. Greedy under torchrl's
+        deterministic exploration type."""
+        if self.model.action["kind"] == "box":
+            loc, scale = self.model.policy(x)
+            dist = torch.distributions.Independent(torch.distributions.Normal(loc, scale), 1)
+            greedy = loc
+        else:
+            logits = self.model.policy(x)
+            dist = torch.distributions.Categorical(logits=logits)
+            greedy = logits.argmax(-1)
+        action = greedy if exploration_type() == ExplorationType.DETERMINISTIC else dist.sample()
+        return action, dist.log_prob(action)
 
     def _opponents(self, tensordict: TensorDictBase) -> None:
         cdf = torch.cumsum(self.opponent_probs, 0)

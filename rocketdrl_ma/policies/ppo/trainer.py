@@ -51,6 +51,10 @@ class TrainResult:
     losses: list[dict[str, float]] = field(default_factory=list)
     #: every iteration's policy lag: updates between the weights that collected its batch and the learner's
     policy_lags: list[int] = field(default_factory=list)
+    #: agent steps per second from the first batch on (worker start-up left out), and the learner's share of
+    #: that wall time
+    steps_per_s: float = float("nan")
+    learner_share: float = float("nan")
 
 
 class StopRequest:
@@ -156,6 +160,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     losses: dict[str, float] = {}
     loss_history: list[dict[str, float]] = []
     lags: list[int] = []
+    speed = (float("nan"), float("nan"))  # steps/s and the learner's share, from the first batch on
     match = MatchTally(probe.rows_per_copy)
     # A warm-started policy was fitted to inputs scaled by the imitation data's statistics. Fed with PPO's
     # own states they drift (by up to 0.5 in mean and 1.5 in variance over 0.4M self-play steps), and the
@@ -217,6 +222,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             bar.set_postfix_str(f"{rate:,.0f} steps/s  learner {busy_learning / max(elapsed, 1e-9):.0%}  "
                                 f"{rollouts.describe()}  {outcome}{level}")
             perf = {"collect_s": collect_s, "learn_s": learn_s, "agent_steps_per_s": rate, "policy_lag": lag}
+            speed = (rate, busy_learning / max(elapsed, 1e-9)) if not first else speed
             # ---- curriculum (ML-Agents' lessons): harder once the last episodes at this level succeed often enough
             if curriculum and difficulty < 1.0 and len(recent) == SUCCESS_WINDOW and success >= curriculum["threshold"]:
                 difficulty = min(1.0, round(difficulty + curriculum["step"], 6))
@@ -245,7 +251,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     metrics = {"train_success_rate": success, "train_mean_return": ret, **losses}
     meta = checkpoint_meta(cfg, model, probe.obs_dim, agent_steps, metrics, difficulty)
     path = save_checkpoint(out, model, meta, optimizer)
-    return TrainResult(path, agent_steps, history, loss_history, lags)
+    return TrainResult(path, agent_steps, history, loss_history, lags, *speed)
 
 
 def sync_controls(policy: RolloutPolicy, difficulty: float | None, kickstart: bool,
