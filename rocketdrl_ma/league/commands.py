@@ -21,7 +21,7 @@ def _run_league(args: argparse.Namespace) -> int:
             print(f"[{match.index + 1}/{len(planned)}] {match.key}: {match.blue} {result.score_blue} - "
                   f"{result.score_orange} {match.orange} (seed {match.seed}, {result.duration_s:.0f} s)", flush=True)
 
-        run = run_league(cfg, max_matches=args.max_matches, on_result=show)
+        run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray)
         print(f"league {cfg.name}: {run.scheduled} scheduled, {run.already_stored} already stored, "
               f"{run.played} played now", flush=True)
     with ResultsStore(cfg.results) as store:
@@ -59,6 +59,11 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", default=None, help="replace the config's report folder")
     p.add_argument("--max-matches", type=int, default=None, help="play at most this many missing matches")
     p.add_argument("--report-only", action="store_true", help="rate the stored matches, play none")
+    p.add_argument("--workers", type=int, default=0,
+                   help="play this many local matches at once, each in its own process (default 0: one at a "
+                        "time in this process); results and ratings are the same either way")
+    p.add_argument("--ray", default=None, metavar="auto|HOST:PORT",
+                   help="play local matches as tasks on a Ray cluster (`pip install rocketdrl-ma[cluster]`)")
     p.set_defaults(run=_run_league)
     b = sub.add_parser("league-bot", help="a remote league entrant: wait for invitations, play them on the server")
     b.add_argument("--entrant", required=True, help="the entrant's name in the league YAML (remote: true)")

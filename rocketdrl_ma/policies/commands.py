@@ -8,11 +8,15 @@ from pathlib import Path
 
 def _run_train(args: argparse.Namespace) -> int:
     from rocketdrl_ma.policies.ppo import load_train_config, train
+    from rocketdrl_ma.policies.ppo.trainer import worker_plan
 
     overrides = {} if args.max_steps is None else {"max_steps": args.max_steps}
     if args.seed is not None:
         overrides["seed"] = args.seed
+    if args.asynchronous:
+        overrides["async"] = True
     cfg = load_train_config(args.config, overrides)
+    plan = worker_plan(cfg, args.workers, args.ray)
     name = Path(args.config).stem
     run_dir = Path(args.run_dir or Path("runs") / name)
     out = Path(args.out or run_dir / "final.pt")
@@ -20,7 +24,8 @@ def _run_train(args: argparse.Namespace) -> int:
     if cfg["watch_every"]:  # evaluation episodes for `rocketdrl-ma web`, published on Zenoh
         from rocketdrl_ma.web.training import broadcast_from_train_config
         watch = broadcast_from_train_config(cfg, run_dir)
-    result = train(cfg, out=out, run_dir=run_dir, resume=args.resume, progress=not args.quiet, watch=watch)
+    result = train(cfg, out=out, run_dir=run_dir, resume=args.resume, progress=not args.quiet, watch=watch,
+                   workers=plan)
     for steps, success, ret, episodes in result.history:
         print(f"steps {steps:>10,d}  success {success:6.1%}  return {ret:+8.2f}  episodes {episodes}")
     print(f"checkpoint: {result.checkpoint} ({result.agent_steps:,d} agent steps); TensorBoard logs: {run_dir}")
@@ -55,6 +60,14 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--resume", default=None, help="continue from this checkpoint (its step count and optimizer)")
     p.add_argument("--max-steps", type=int, default=None, help="override max_steps (agent steps)")
     p.add_argument("--seed", type=int, default=None, help="override the config's seed")
+    p.add_argument("--workers", type=int, default=None,
+                   help="rollout worker processes (default: the config's n_workers, else one per CPU core; "
+                        "0: step the env copies in this process)")
+    p.add_argument("--ray", default=None, metavar="auto|HOST:PORT",
+                   help="run the rollout workers on a Ray cluster (`pip install rocketdrl-ma[cluster]`): 'auto' "
+                        "joins the cluster this machine belongs to, HOST:PORT a head node's address")
+    p.add_argument("--async", dest="asynchronous", action="store_true",
+                   help="update on each worker's batch as it arrives (overlaps collection and learning)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=_run_train)
     e = sub.add_parser("eval", help="greedy evaluation of a checkpoint: success rate and mean return")

@@ -30,7 +30,7 @@ TINY = {
     "env_overrides": {"kickoff_countdown_s": 0.0, "clock_s": 4.0, "overtime_limit_s": 4.0, "boost_pads": False,
                       "observation": "seed_sensors", "action": "seed",
                       "rewards": {"touch": 1.0, "player_velocity_to_ball": 0.1}},
-    "n_envs": 2, "buffer_size": 512, "batch_size": 128, "num_epoch": 2, "normalize": True,
+    "n_envs": 2, "n_workers": 0, "buffer_size": 512, "batch_size": 128, "num_epoch": 2, "normalize": True,
     "hidden_units": 32, "max_steps": 2048, "summary_freq": 1024, "checkpoint_interval": 1024, "keep_checkpoints": 1,
 }
 

@@ -12,11 +12,15 @@ from rocketdrl_ma.policies.ppo.model import PPOModel, action_spec
 from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.selfplay.imitation import collect, disagreement
 from rocketdrl_ma.policies.selfplay.pfsp import PFSP
-from rocketdrl_ma.policies.selfplay.pool import SELF, SelfPlayPool
+from rocketdrl_ma.policies.ppo.rollout import RolloutEnv
+from rocketdrl_ma.policies.ppo.rollout_policy import RolloutPolicy
+from rocketdrl_ma.policies.ppo.trainer import sync_controls, worker_config
+from rocketdrl_ma.policies.selfplay.games import SELF, SelfPlayGames
+from rocketdrl_ma.policies.selfplay.pool import OpponentPool
 
 # policies/selfplay_1v1.yaml cut down: 3 s matches (so episodes end and PFSP gets results), a tiny network
 TINY = {"env_overrides": {"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 1.0},
-        "n_envs": 2, "buffer_size": 256, "batch_size": 128, "num_epoch": 1, "hidden_units": 32,
+        "n_envs": 2, "n_workers": 0, "buffer_size": 256, "batch_size": 128, "num_epoch": 1, "hidden_units": 32,
         "max_steps": 1024, "summary_freq": 512, "checkpoint_interval": 1024, "keep_checkpoints": 1,
         "selfplay": {"snapshot_interval": 256, "pool_size": 2, "scripted": ["ball_chaser"], "self_play": 0.2,
                      "window": 20}}
@@ -35,7 +39,7 @@ def test_selfplay_section_is_validated():
     with pytest.raises(ValueError, match="selfplay.self_play"):
         validate_train_config({**raw, "selfplay": {"self_play": 1.5}})
     with pytest.raises(ValueError, match="selfplay: needs a match"):
-        SelfPlayPool(validate_train_config({**raw, "env": "minigames/penalty.yaml", "env_overrides": {}}), "unused")
+        SelfPlayGames(validate_train_config({**raw, "env": "minigames/penalty.yaml", "env_overrides": {}}), 1)
 
 
 def test_pfsp_picks_the_opponents_it_loses_to_more_often():
@@ -64,11 +68,13 @@ def test_pfsp_picks_the_opponents_it_loses_to_more_often():
     assert var.weights()["even"] > var.weights()["we_beat"]
 
 
-def _pool(tmp_path) -> tuple[SelfPlayPool, PPOModel, dict]:
+def _pool(tmp_path) -> tuple[OpponentPool, PPOModel, dict]:
     cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY})
-    pool = SelfPlayPool(cfg, tmp_path)
-    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 32, 2, True)
-    return pool, model, cfg
+    games = SelfPlayGames(cfg, 1)
+    obs_dim = games.observation_space.shape[0]
+    model = PPOModel(obs_dim, action_spec(games.action_space), 32, 2, True)
+    games.close()
+    return OpponentPool(cfg, tmp_path, obs_dim), model, cfg
 
 
 def test_snapshots_enter_the_pool_and_the_learner_plays_both_sides(tmp_path):
@@ -80,32 +86,45 @@ def test_snapshots_enter_the_pool_and_the_learner_plays_both_sides(tmp_path):
             model.value[0].bias.add_(1.0)
         path = pool.snapshot(model, steps)
         assert load_policy(f"checkpoint:{path}").model.value[0].bias[0] == model.value[0].bias[0]
-    # pool_size 2: the oldest snapshot left the pool (its file stays, a checkpoint for leagues)
+    # pool_size 2: the oldest snapshot left the pool (its file stays, a checkpoint for leagues); its slot went
+    # to the newest one, one generation on
     assert set(pool.opponents) == {"scripted:ball_chaser", "snapshot:512", "snapshot:768"}
-    assert len(pool.snapshots()) == 3
-    assert "snapshot:256" not in pool.pfsp.results
+    assert len(pool.snapshots()) == 3 and "snapshot:256" not in pool.pfsp.results
+    assert pool.slot_names == ["snapshot:768", "snapshot:512"] and pool.slot_generation == [2, 1]
+    assert torch.equal(pool.slot_models[0].value[0].bias, model.value[0].bias)
+    probs = pool.probabilities()
+    assert probs[SELF] == pytest.approx(cfg["selfplay"]["self_play"]) and probs.sum() == pytest.approx(1.0)
 
-    obs = pool.reset()
-    assert obs.shape == (cfg["n_envs"], pool.observation_space.shape[0])  # rows: the learner's cars only
+    # the games of a rollout worker, driven by the rollout policy as a collector would
+    env = RolloutEnv(worker_config(cfg), copies=cfg["n_envs"])
+    policy = RolloutPolicy(model, pool.slot_models, pool.n_opponents)
+    sync_controls(policy, None, False, pool)
+    td = env.reset()
+    assert td["observation"].shape == (cfg["n_envs"], env.observation_space.shape[0])  # the learner's cars only
     sides, opponents = set(), set()
     for _ in range(150):  # 3 s matches: several episodes per copy
-        step = pool.step(np.zeros((pool.n_rows, pool.action_space.shape[0]), np.float32))
-        sides.update(pool._learner_team)
-        opponents.update(pool._opponent)
+        td = env.step(policy(td))
+        sides.update(env.games.learner_team)
+        opponents.update(env.games.opponent)
+        nxt = td["next"]
+        for opponent, generation, points in zip(nxt["match_opponent"][nxt["match_end"]].tolist(),
+                                                nxt["match_generation"][nxt["match_end"]].tolist(),
+                                                nxt["match_points"][nxt["match_end"]].tolist()):
+            pool.record(opponent, generation, points)
+        td = env.reset(td["next"].update({"_reset": nxt["done"]})) if nxt["done"].any() else td["next"]
+    env.close()
     assert sides == {"blue", "orange"}
     assert sum(pool.picks.values()) > cfg["n_envs"]
-    assert opponents - {SELF} and opponents <= set(pool.opponents) | {SELF}
+    assert opponents - {SELF} and {pool.name_of(o) for o in opponents} <= set(pool.opponents) | {"self"}
     assert sum(len(r) for r in pool.pfsp.results.values()) > 0  # results recorded for PFSP
-    pool.close()
 
     # a resumed run finds the newest snapshots again
     again, model2, _ = _pool(tmp_path)
     again.attach(model2, 800)
     assert {"snapshot:512", "snapshot:768"} <= set(again.opponents) and again.next_snapshot == 1024
-    again.close()
 
 
-def test_each_copy_of_the_pool_plays_the_lone_env_game_of_its_seed(tmp_path):
+def test_each_copy_of_the_games_plays_the_lone_env_game_of_its_seed():
     """Copy i is the PettingZoo env seeded ``seed + i`` with the learner on its side (copies start on alternate
     sides) and the opponent's actions in the other columns: rewards and ends match a lone env's bit for bit, rows
     to 1e-6 (the VectorEnv builds team-relative observations for all arenas at once)."""
@@ -114,12 +133,18 @@ def test_each_copy_of_the_pool_plays_the_lone_env_game_of_its_seed(tmp_path):
 
     cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
                                  "selfplay": {**TINY["selfplay"], "self_play": 0.0}})
-    pool = SelfPlayPool(cfg, tmp_path)
-    pool.attach(PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 32, 2, True), 1)
+    games = SelfPlayGames(cfg, cfg["n_envs"])
     rng = np.random.default_rng(3)
-    actions = rng.uniform(-1.0, 1.0, (60, pool.n_rows, 8)).astype(np.float32)
-    rows = [pool.reset()]
-    results = [pool.step(a) for a in actions]
+    actions = rng.uniform(-1.0, 1.0, (60, games.n_rows, 8)).astype(np.float32)
+    rows = [games.reset()]
+    copies = np.arange(cfg["n_envs"])
+    games.begin_episodes(copies, np.ones(cfg["n_envs"], int), np.zeros(cfg["n_envs"], int))  # 1: scripted:ball_chaser
+    results = []
+    for a in actions:
+        step, _, _ = games.step(a, np.zeros_like(a))
+        results.append(step)
+        if step.terminated.any() or step.truncated.any():
+            break
     for i in range(cfg["n_envs"]):
         learner = "orange_0" if i % 2 == 0 else "blue_0"  # episode 1 of copy i: TEAMS[(i + 1) % 2]
         opponent_name = "blue_0" if learner == "orange_0" else "orange_0"
@@ -138,7 +163,7 @@ def test_each_copy_of_the_pool_plays_the_lone_env_game_of_its_seed(tmp_path):
                 break
             assert np.allclose(result.obs[i], obs[learner], rtol=0.0, atol=1e-6), (i, t)
         env.close()
-    pool.close()
+    games.close()
 
 
 @pytest.mark.slow
@@ -163,16 +188,16 @@ def test_imitation_warm_start_clones_the_bot(tmp_path):
                                "selfplay": {"imitate": {"dagger_rounds": -1}}})
     cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
                                  "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 300, "epochs": 15}}})
-    pool = SelfPlayPool(cfg, tmp_path)
-    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 64, 2, True)
+    pool, _, _ = _pool(tmp_path)
+    model = PPOModel(pool.obs_dim, {"kind": "box", "dim": 8}, 64, 2, True)
+    pool = OpponentPool(cfg, tmp_path, pool.obs_dim)
     obs, actions = collect(cfg["env"], cfg["env_overrides"], "ball_chaser", "ball_chaser", 100, seed=5)
-    assert obs.shape == (200, pool.observation_space.shape[0]) and actions.shape == (200, 8)  # both cars
+    assert obs.shape == (200, pool.obs_dim) and actions.shape == (200, 8)  # both cars
     error_before = np.mean((model.act_deterministic(obs) - actions) ** 2)
     pool.attach(model, 0)  # a fresh run: the warm start runs here
     losses = pool.imitation["losses"]
     assert len(losses) == 15 and losses[-1] < 0.5 * losses[0]
     assert np.mean((model.act_deterministic(obs) - actions) ** 2) < 0.5 * error_before  # on other matches too
-    pool.close()
 
 
 def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tmp_path):
@@ -187,16 +212,17 @@ def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tm
                                  "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 300, "epochs": 5,
                                                                               "dagger_rounds": 2,
                                                                               "dagger_decisions": 200}}})
-    pool = SelfPlayPool(cfg, tmp_path)
-    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 64, 2, True,
-                     features="car_local")
+    games = SelfPlayGames(cfg, 1)
+    obs_dim, action = games.observation_space.shape[0], action_spec(games.action_space)
+    games.close()
+    pool = OpponentPool(cfg, tmp_path, obs_dim)
+    model = PPOModel(obs_dim, action, 64, 2, True, features="car_local")
     pool.attach(model, 0)
-    pool.close()
     rounds = pool.imitation["dagger_disagreement"]
     assert len(rounds) == 2 and all(0.0 <= r <= 1.0 for r in rounds)
 
     obs, labels = collect(cfg["env"], overrides, "ball_chaser", "ball_chaser", 120, 7, model, bot_share=0.0)
-    assert labels.dtype == np.int64 and obs.shape == (120, pool.observation_space.shape[0])
+    assert labels.dtype == np.int64 and obs.shape == (120, obs_dim)
     env, bot = RocketDRLParallelEnv(cfg["env"], **overrides), make_scripted("ball_chaser")
     seen, episode = env.reset(seed=7)[0], 0
     for t in range(120):  # the same game again: the clone's car on alternating sides, the bot on the other
@@ -249,21 +275,22 @@ def test_teacher_labels_are_the_bots_rows_for_the_learners_cars_on_both_sides(tm
     cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
                                  "env_overrides": {**TINY["env_overrides"], "action": "lookup"},
                                  "selfplay": {**TINY["selfplay"], "kickstart": {"bot": "goalie"}}})
-    pool = SelfPlayPool(cfg, tmp_path)
-    model = PPOModel(pool.observation_space.shape[0], action_spec(pool.action_space), 32, 2, True)
-    pool.attach(model, 0)
-    pool.reset()
-    goalie, sides = make_scripted("goalie"), set()
+    games = SelfPlayGames(cfg, cfg["n_envs"])
+    games.reset()
+    goalie, sides, rng = make_scripted("goalie"), set(), np.random.default_rng(0)
     for _ in range(60):
-        labels = pool.teacher_actions()
-        assert labels.shape == (pool.n_rows,) and labels.dtype.kind == "i"
-        for i, env in enumerate(pool.envs):
-            (agent,) = pool._learners(i)
+        labels = games.teacher_actions()
+        assert labels.shape == (games.n_rows,) and labels.dtype.kind == "i"
+        for i, env in enumerate(games.envs):
+            (agent,) = games.learners(i)
             sides.add(agent)
             assert labels[i] == env.action_parser.encode(goalie.act(agent, env.game_state))
-        pool.step(np.random.default_rng(0).integers(0, 90, pool.n_rows))
+        step, _, _ = games.step(rng.integers(0, 90, games.n_rows), rng.integers(0, 90, games.n_rows))
+        ended = step.terminated | step.truncated
+        if ended.any():
+            games.reset_copies(ended)
     assert sides == {"blue_0", "orange_0"}
-    pool.close()
+    games.close()
 
 
 @pytest.mark.slow

@@ -148,7 +148,7 @@ def test_training_with_watch_every_shows_the_current_policy_on_the_page(stack, t
 
     cfg = validate_train_config({
         "env": "matches/1v1.yaml", "n_envs": 2, "buffer_size": 256, "batch_size": 128, "num_epoch": 1,
-        "hidden_units": 16, "max_steps": 1536, "summary_freq": 1024, "checkpoint_interval": 100_000,
+        "hidden_units": 16, "max_steps": 1536, "summary_freq": 1024, "checkpoint_interval": 100_000, "n_workers": 0,
         "env_overrides": {"kickoff_countdown_s": 0.0, "clock_s": 3.0, "overtime_limit_s": 1.0},
         "watch_every": 2, "watch_server": "web", "watch_connect": [stack["endpoint"]]})
     run_dir = tmp_path / "watched-run"

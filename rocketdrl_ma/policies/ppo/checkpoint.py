@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from rocketdrl_ma.config import REPO_ROOT
+from rocketdrl_ma.config import REPO_ROOT, load_config
 from rocketdrl_ma.env.actions import make_action_parser
 from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.policies.registry import ObservingPolicy
@@ -30,6 +30,17 @@ def sidecar(path: str | Path, suffix: str) -> Path:
     """``runs/x/step_100.pt`` -> ``runs/x/step_100<suffix>``."""
     p = Path(path)
     return p.with_name(p.name[:-3] + suffix if p.name.endswith(".pt") else p.name + suffix)
+
+
+def checkpoint_meta(cfg: dict[str, Any], model: PPOModel, obs_dim: int, agent_steps: int,
+                    metrics: dict[str, float], difficulty: float | None = None) -> dict[str, Any]:
+    """The JSON beside a checkpoint: the network's shape, the env it plays, the training config, its step count."""
+    net = {"obs_dim": obs_dim, "action": model.action, "hidden_units": cfg["hidden_units"],
+           "num_layers": cfg["num_layers"], "normalize": cfg["normalize"], "features": model.features}
+    env = {"config": cfg["env"], "overrides": cfg["env_overrides"],
+           "resolved": load_config(cfg["env"], cfg["env_overrides"])}
+    return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg, "metrics": metrics,
+            "difficulty": difficulty}
 
 
 def save_checkpoint(path: str | Path, model: PPOModel, meta: dict[str, Any],

@@ -24,6 +24,11 @@ difficulty by ``step`` up to 1; empty: train at the env config's difficulty thro
 ``selfplay``: train one team against an opponent pool (``policies/selfplay/config.py``); empty: none.
 ``features``: fixed inputs the model computes from the observation (``features.py``): ``none``, or
 ``car_local`` (ball and other cars in the car's own frame; needs the ``team_relative`` observation).
+``n_workers``: rollout worker processes, each stepping ``ceil(n_envs / n_workers)`` env copies with its own copy
+of the policy (``workers.py``); ``null`` (the default): one per core of the machine, 0: the env copies run in the
+trainer's own process; ``--workers`` overrides it. ``async``: the learner updates on each worker's batch as it
+arrives while the others go on collecting (the policy lag, in updates, goes to TensorBoard); false: every
+iteration waits for all workers, and a seed and worker count give the same run.
 ``watch_every``: every that many iterations, play one greedy evaluation episode of the current policy and
 publish it for ``rocketdrl-ma web`` (``rocketdrl_ma/web/training.py``) to the match server ``watch_server``
 reached at ``watch_connect``; 0: never.
@@ -72,6 +77,8 @@ TRAIN_DEFAULTS: dict[str, Any] = {
     "features": "none",
     "curriculum": {},
     "selfplay": {},
+    "n_workers": None,
+    "async": False,
     "watch_every": 0,
     "watch_server": "local",
     "watch_connect": ["tcp/127.0.0.1:7447"],
@@ -126,6 +133,13 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
         raise ValueError(f"features: {cfg['features']!r} is not one of {list(FEATURES)}")
     if not isinstance(cfg["normalize"], bool):
         raise ValueError(f"normalize: expected true or false, got {cfg['normalize']!r}")
+    if cfg["n_workers"] is not None:
+        _check_number("n_workers", cfg["n_workers"], int)
+        if cfg["n_workers"] < 0:
+            raise ValueError(f"n_workers: must be >= 0 (0: no worker processes) or null (one per core), "
+                             f"got {cfg['n_workers']}")
+    if not isinstance(cfg["async"], bool):
+        raise ValueError(f"async: expected true or false, got {cfg['async']!r}")
     _check_number("watch_every", cfg["watch_every"], int)
     if cfg["watch_every"] < 0:
         raise ValueError(f"watch_every: must be >= 0 (0: no evaluation episodes to watch), got {cfg['watch_every']}")

@@ -3,10 +3,12 @@
 The copies are the arenas of one ``VectorEnv`` (one PyBullet world stepped once per tick for all of them); each is
 the PettingZoo env's own game, copy ``i`` seeded with ``seed + i``.
 
-All agents share one policy (for a match that is self-play against itself). A copy that ends is reset
-at once; ``step`` reports the finished episodes (return, length, success) and, for rows cut off by a
-time limit, their final observation so the trainer can bootstrap from it. With ``shaping`` weights the
-pool also returns the potential-based shaping term of each row (``shaping.py``).
+All agents share one policy (for a match that is self-play against itself). ``step`` reports the finished
+episodes (return, length, success) and the final observation of every row whose episode ended; with
+``autoreset`` (the default) a copy that ends is reset at once and its rows carry the next episode's first
+observation, without it the rows keep their final observation until ``reset_copies`` (what a torchrl env's
+partial reset needs, ``rollout.py``). With ``shaping`` weights the pool also returns the potential-based
+shaping term of each row (``shaping.py``).
 """
 from __future__ import annotations
 
@@ -56,7 +58,7 @@ class EnvPool:
     """``n_envs`` copies of a PettingZoo env, stepped together as the arenas of one ``VectorEnv``."""
 
     def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None,
-                 shaping: dict[str, float] | None = None):
+                 shaping: dict[str, float] | None = None, autoreset: bool = True):
         overrides = {**(overrides or {}), "info_format": "full"}
         self.vec = VectorEnv(config, n_arenas=n_envs, autoreset=False, **overrides)
         self.envs: list[RocketDRLParallelEnv] = self.vec.lanes
@@ -70,6 +72,7 @@ class EnvPool:
         self._lengths = np.zeros(self.n_rows, dtype=np.int64)
         self.shaping = dict(shaping or {})
         self._phi = np.zeros(self.n_rows)
+        self.autoreset = autoreset
 
     def _rows(self, i: int) -> slice:
         return slice(i * len(self.agents), (i + 1) * len(self.agents))
@@ -108,16 +111,25 @@ class EnvPool:
                 row = rows.start + k
                 episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
                                         episode_success(agent, infos[i][agent]), int(i)))
-        if ended.any():
-            new_obs, _ = self.vec.reset_arenas(ended)
-            for i in np.flatnonzero(ended):
-                rows = self._rows(int(i))
-                obs[rows] = new_obs[i]
-                self._phi[rows] = self._potentials(self.envs[int(i)])
+        if self.autoreset and ended.any():
+            obs = self._reset_ended(obs, ended)
         done = terminated | truncated
         self._returns = np.where(done, 0.0, self._returns + reward)
         self._lengths = np.where(done, 0, self._lengths + 1)
         return StepResult(obs, reward, shaping, terminated, truncated, final_obs, episodes)
+
+    def reset_copies(self, ended: np.ndarray, obs: np.ndarray) -> np.ndarray:
+        """Start the next episode of the copies flagged in ``ended`` [copies]; ``obs`` [rows, obs_dim] with
+        those copies' rows replaced by their first observation."""
+        return self._reset_ended(np.array(obs, copy=True), np.asarray(ended, bool))
+
+    def _reset_ended(self, obs: np.ndarray, ended: np.ndarray) -> np.ndarray:
+        new_obs, _ = self.vec.reset_arenas(ended)
+        for i in np.flatnonzero(ended):
+            rows = self._rows(int(i))
+            obs[rows] = new_obs[i]
+            self._phi[rows] = self._potentials(self.envs[int(i)])
+        return obs
 
     def _potentials(self, env: RocketDRLParallelEnv) -> list[float]:
         if not self.shaping:

@@ -128,6 +128,16 @@ class PPOModel(nn.Module):
         return self.policy(x).argmax(-1).numpy()
 
 
+@torch.no_grad()
+def sample_env_actions(model: PPOModel, obs: torch.Tensor | np.ndarray) -> np.ndarray:
+    """Env actions sampled from ``model``'s policy for a batch of raw observations (how an opponent plays)."""
+    x = model.obs_norm(torch.as_tensor(np.asarray(obs, np.float32)))
+    if model.action["kind"] == "box":
+        loc, scale = model.policy(x)
+        return env_actions(model.action, torch.normal(loc, scale))
+    return env_actions(model.action, torch.distributions.Categorical(logits=model.policy(x)).sample())
+
+
 def env_actions(action: dict, sampled: torch.Tensor) -> np.ndarray:
     """What the env receives for the policy's samples: Box samples clipped into [-1, 1], indices as ints."""
     if action["kind"] == "box":

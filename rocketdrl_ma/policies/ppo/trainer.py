@@ -1,9 +1,11 @@
-"""PPO, read top to bottom: collect a buffer from every env copy, estimate advantages, a few epochs of
-clipped updates, log, checkpoint, repeat. torchrl supplies the GAE and the clipped PPO loss.
+"""PPO, read top to bottom: the rollout workers collect a batch, the learner estimates advantages and runs a
+few epochs of clipped updates, the new weights go back to the workers; log, checkpoint, repeat. torchrl
+supplies the collectors (``workers.py``), the GAE and the clipped PPO loss.
 
-One iteration collects ``buffer_size`` agent steps (``buffer_size // rows`` decisions of every row). A
-row's trajectory is cut every ``time_horizon`` decisions and bootstrapped with the critic, as in
-ML-Agents; episodes cut off by a time limit bootstrap from their final observation, real ends do not.
+One iteration collects ``buffer_size`` agent steps (``buffer_size // rows`` decisions of every row of every
+worker; with ``async: true`` every worker's batch is one iteration of that size). A row's trajectory is cut
+every ``time_horizon`` decisions and bootstrapped with the critic, as in ML-Agents; episodes cut off by a time
+limit bootstrap from their final observation, real ends do not.
 """
 from __future__ import annotations
 
@@ -19,7 +21,6 @@ from typing import Any
 import numpy as np
 import torch
 from tensordict import TensorDict
-from torchrl.envs.utils import ExplorationType, set_exploration_type
 from torchrl.objectives import ClipPPOLoss
 from torchrl.objectives.value.functional import generalized_advantage_estimate
 from tqdm import tqdm
@@ -28,10 +29,14 @@ from rocketdrl_ma.config import load_config
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.policies.selfplay.imitation import imitation_loss
 from rocketdrl_ma.policies.selfplay.kickstart import teacher_weight
+from rocketdrl_ma.policies.selfplay.pool import OpponentPool
 
-from .checkpoint import ModelPolicy, read_meta, resolve_checkpoint, save_checkpoint, sidecar
-from .envs import EnvPool
-from .model import PPOModel, action_spec, env_actions
+from .checkpoint import ModelPolicy, checkpoint_meta, read_meta, resolve_checkpoint, save_checkpoint, sidecar
+from .envs import Episode
+from .model import PPOModel, action_spec
+from .rollout import RolloutEnv
+from .rollout_policy import RolloutPolicy
+from .workers import Rollouts, WorkerPlan, default_workers
 
 SUCCESS_WINDOW = 100  # episodes behind the progress bar's success rate and return
 
@@ -42,6 +47,14 @@ class TrainResult:
     agent_steps: int
     #: (agent steps, success rate, mean return, episodes) at every summary
     history: list[tuple[int, float, float, int]] = field(default_factory=list)
+    #: the last epoch's mean losses of every iteration
+    losses: list[dict[str, float]] = field(default_factory=list)
+    #: every iteration's policy lag: updates between the weights that collected its batch and the learner's
+    policy_lags: list[int] = field(default_factory=list)
+    #: agent steps per second from the first batch on (worker start-up left out), and the learner's share of
+    #: that wall time
+    steps_per_s: float = float("nan")
+    learner_share: float = float("nan")
 
 
 class StopRequest:
@@ -68,41 +81,55 @@ def pick_device(name: str) -> torch.device:
     return torch.device(name)
 
 
-def checkpoint_meta(cfg: dict[str, Any], model: PPOModel, obs_dim: int, agent_steps: int,
-                    metrics: dict[str, float], difficulty: float | None = None) -> dict[str, Any]:
-    net = {"obs_dim": obs_dim, "action": model.action, "hidden_units": cfg["hidden_units"],
-           "num_layers": cfg["num_layers"], "normalize": cfg["normalize"], "features": model.features}
-    env = {"config": cfg["env"], "overrides": cfg["env_overrides"],
-           "resolved": load_config(cfg["env"], cfg["env_overrides"])}
-    return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg, "metrics": metrics,
-            "difficulty": difficulty}
+def worker_config(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The training config as a worker needs it: the env config resolved to a mapping, so a worker on another
+    machine needs no YAML files."""
+    return {**cfg, "env": load_config(cfg["env"], cfg["env_overrides"]), "env_overrides": {}}
 
 
-def make_pool(cfg: dict[str, Any], run_dir: Path):
-    """The env copies the trainer collects from: every agent is the learner, or with a ``selfplay``
-    section, the learner's team against an opponent pool (``policies/selfplay/pool.py``)."""
-    if cfg["selfplay"]:
-        from rocketdrl_ma.policies.selfplay.pool import SelfPlayPool
-        return SelfPlayPool(cfg, run_dir)
-    return EnvPool(cfg["env"], cfg["n_envs"], cfg["seed"], cfg["env_overrides"], cfg["shaping"])
+def worker_plan(cfg: dict[str, Any], n_workers: int | None = None, ray: str | None = None) -> WorkerPlan:
+    """``n_workers`` (else the config's, else the machine's cores) and ``async`` from the config."""
+    chosen = n_workers if n_workers is not None else cfg["n_workers"]
+    return WorkerPlan(default_workers() if chosen is None else int(chosen), bool(cfg["async"]), ray)
+
+
+@dataclass
+class Probe:
+    """What the learner needs to know of the env before any worker starts."""
+
+    obs_dim: int
+    action: dict
+    rows_per_copy: int
+    idle: np.ndarray | None  # the idle car's controls as a Box action (the Gaussian's initial mean)
+
+    @classmethod
+    def of(cls, cfg: dict[str, Any]) -> "Probe":
+        env = RolloutEnv(cfg, copies=1)
+        try:
+            action = action_spec(env.action_space)
+            parser = env.games.envs[0].action_parser
+            idle = parser.encode(CarControls()) if action["kind"] == "box" else None
+            return cls(env.observation_space.shape[0], action, env.copy_rows, idle)
+        finally:
+            env.close()
 
 
 def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str | Path | None = None,
-          progress: bool = True, watch=None) -> TrainResult:
+          progress: bool = True, watch=None, workers: WorkerPlan | None = None) -> TrainResult:
     """Train until ``cfg["max_steps"]`` agent steps; write the final checkpoint to ``out``.
 
-    ``watch`` (e.g. ``rocketdrl_ma.web.training.TrainingBroadcast``) gets the playing policy after every
-    iteration it says is ``due``: ``watch.publish(iteration, policy)``; the trainer closes it at the end."""
-    torch.set_num_threads(1)  # small networks: one thread is fastest and fair to the other jobs on the box
+    ``workers`` says where the env copies run (default: ``worker_plan(cfg)``). ``watch`` (e.g.
+    ``rocketdrl_ma.web.training.TrainingBroadcast``) gets the playing policy after every iteration it says is
+    ``due``: ``watch.publish(iteration, policy)``; the trainer closes it at the end."""
+    torch.set_num_threads(1)  # small networks: one thread is fastest and leaves the cores to the workers
     torch.manual_seed(cfg["seed"])
     device = pick_device(cfg["device"])
     run_dir = Path(run_dir)
-    pool = make_pool(cfg, run_dir)
-    obs_dim = pool.observation_space.shape[0]
-    action = action_spec(pool.action_space)
-    idle = pool.envs[0].action_parser.encode(CarControls()) if action["kind"] == "box" else None
-    model = PPOModel(obs_dim, action, cfg["hidden_units"], cfg["num_layers"], cfg["normalize"],
-                     cfg["init_std"], idle, cfg["features"]).to(device)
+    plan = workers or worker_plan(cfg)
+    wcfg = worker_config(cfg)
+    probe = Probe.of(wcfg)
+    model = PPOModel(probe.obs_dim, probe.action, cfg["hidden_units"], cfg["num_layers"], cfg["normalize"],
+                     cfg["init_std"], probe.idle, cfg["features"]).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg["learning_rate"], eps=1e-5)
     agent_steps = 0
     curriculum = cfg["curriculum"]
@@ -115,13 +142,15 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             optimizer.load_state_dict(torch.load(sidecar(path, ".optim.pt"), map_location=device, weights_only=True))
         agent_steps = int(meta["agent_steps"])
         difficulty = meta.get("difficulty", difficulty)
-    if hasattr(pool, "attach"):  # the self-play pool: the learner is also an opponent, snapshots join the pool
-        pool.attach(model, agent_steps)
-
+    opponents = None
+    if cfg["selfplay"]:  # the learner is also an opponent; snapshots join the pool
+        opponents = OpponentPool(cfg, run_dir, probe.obs_dim)
+        opponents.attach(model, agent_steps)
+    policy = RolloutPolicy(model, opponents.slot_models if opponents else None,
+                           opponents.n_opponents if opponents else 0)
+    rollouts = Rollouts(wcfg, policy, plan, probe.rows_per_copy)
     loss_module = make_loss(model, cfg)
-    actor = model.td_modules()[0]  # the same parameters the loss trains
-    rows = pool.n_rows
-    horizon = max(1, cfg["buffer_size"] // rows)  # decisions per row per iteration
+    decision_s = wcfg["env"]["tick_skip"] / 120.0
     writer = _summary_writer(run_dir)
     recent: collections.deque = collections.deque(maxlen=SUCCESS_WINDOW)
     since_summary: list = []
@@ -129,132 +158,204 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     next_summary = (agent_steps // cfg["summary_freq"] + 1) * cfg["summary_freq"]
     next_checkpoint = (agent_steps // cfg["checkpoint_interval"] + 1) * cfg["checkpoint_interval"]
     losses: dict[str, float] = {}
-
-    if difficulty is not None:
-        pool.set_difficulty(difficulty)
+    loss_history: list[dict[str, float]] = []
+    lags: list[int] = []
+    speed = (float("nan"), float("nan"))  # steps/s and the learner's share, from the first batch on
+    match = MatchTally(probe.rows_per_copy)
     # A warm-started policy was fitted to inputs scaled by the imitation data's statistics. Fed with PPO's
     # own states they drift (by up to 0.5 in mean and 1.5 in variance over 0.4M self-play steps), and the
     # clone's weights under the drifted statistics lost what PPO's weights under the clone's kept: keep them.
     frozen_norm = bool(cfg["selfplay"] and cfg["selfplay"]["imitate"])
-    obs = pool.reset()
-    iteration, env_config = 0, load_config(cfg["env"], cfg["env_overrides"])
+    iteration, env_config = 0, wcfg["env"]
     bar = tqdm(total=cfg["max_steps"], initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
-    start_time, start_steps = time.monotonic(), agent_steps
+    start_time, start_steps, busy_learning = None, agent_steps, 0.0
     stop = StopRequest()
-    while agent_steps < cfg["max_steps"] and not stop.requested:
-        # ---- learning rate schedule (ML-Agents' linear: to zero at max_steps)
-        frac = 1.0 - agent_steps / cfg["max_steps"] if cfg["learning_rate_schedule"] == "linear" else 1.0
-        for group in optimizer.param_groups:
-            group["lr"] = cfg["learning_rate"] * max(frac, 1e-3)
+    try:
+        while agent_steps < cfg["max_steps"] and not stop.requested:
+            # ---- learning rate schedule (ML-Agents' linear: to zero at max_steps)
+            frac = 1.0 - agent_steps / cfg["max_steps"] if cfg["learning_rate_schedule"] == "linear" else 1.0
+            for group in optimizer.param_groups:
+                group["lr"] = cfg["learning_rate"] * max(frac, 1e-3)
+            # ---- kickstarting: a scripted teacher's actions on the learner's states (selfplay/kickstart.py)
+            kick_weight = teacher_weight(cfg["selfplay"].get("kickstart", {}), agent_steps)
 
-        # ---- kickstarting: a scripted teacher's actions on the learner's states (policies/selfplay/kickstart.py)
-        kick_weight = teacher_weight(cfg["selfplay"].get("kickstart", {}), agent_steps)
-        buf_teacher, buf_greedy = [], []
+            # ---- what the workers must know, then collect
+            sync_controls(policy, difficulty, kick_weight > 0.0, opponents)
+            rollouts.set_difficulty(difficulty)
+            rollouts.update_weights()
+            t0 = time.monotonic()
+            batch = rollouts.next_batch()
+            collect_s = time.monotonic() - t0
+            t1 = time.monotonic()
+            steps = batch.numel()
+            agent_steps += steps
+            first = start_time is None
+            if first:  # speed counts from the first batch on: worker start-up is not training
+                start_time, start_steps = time.monotonic(), agent_steps
+            episodes = finished_episodes(batch)
+            recent.extend(episodes)
+            since_summary.extend(episodes)
+            if opponents is not None:
+                match.add(batch, decision_s, opponents)
 
-        # ---- collect horizon decisions from every row
-        buf_obs = torch.zeros(horizon, rows, model.input_dim)
-        buf_raw_obs = np.zeros((horizon, rows, obs_dim), np.float32)
-        buf_act, buf_logp = [], torch.zeros(horizon, rows)
-        buf_rew, buf_val, buf_next_val = torch.zeros(horizon, rows), torch.zeros(horizon, rows), torch.zeros(horizon, rows)
-        buf_done, buf_term = torch.zeros(horizon, rows, dtype=torch.bool), torch.zeros(horizon, rows, dtype=torch.bool)
-        model.eval()
-        with torch.no_grad(), set_exploration_type(ExplorationType.RANDOM):
-            for t in range(horizon):
-                x = model.obs_norm(torch.as_tensor(obs, device=device))
-                td = actor(TensorDict({"observation": x}, batch_size=[rows]))
-                if kick_weight:
-                    buf_teacher.append(torch.as_tensor(pool.teacher_actions()))
-                    greedy = td["logits"].argmax(-1) if "logits" in td.keys() else td["loc"].clamp(-1.0, 1.0)
-                    buf_greedy.append(greedy.cpu().numpy())
-                step = pool.step(env_actions(model.action, td["action"].cpu()))
-                buf_raw_obs[t], buf_obs[t] = obs, x.cpu()
-                buf_act.append(td["action"].cpu())
-                buf_logp[t] = td["action_log_prob"].cpu()
-                buf_val[t] = model.value(x).squeeze(-1).cpu()
-                buf_rew[t] = torch.as_tensor(step.reward * cfg["strength"] + step.shaping)
-                buf_term[t] = torch.as_tensor(step.terminated)
-                cut = (t + 1) % cfg["time_horizon"] == 0
-                buf_done[t] = torch.as_tensor(step.terminated | step.truncated) | cut
-                # the critic's value of what came next: the final observation where a time limit cut the
-                # episode, the next observation elsewhere (ignored where the episode truly ended)
-                nxt = np.where(step.truncated[:, None], step.final_obs, step.obs)
-                buf_next_val[t] = model.value(model.obs_norm(torch.as_tensor(nxt, device=device))).squeeze(-1).cpu()
-                obs = step.obs
-                recent.extend(step.episodes)
-                since_summary.extend(step.episodes)
-        if not frozen_norm:
-            model.obs_norm.update(torch.as_tensor(buf_raw_obs.reshape(-1, obs_dim), device=device))
-        agent_steps += horizon * rows
+            # ---- advantages, then num_epoch passes of minibatch updates
+            lag = int(policy.version) - int(batch["policy_version"].min())
+            lags.append(lag)
+            losses = learn(model, loss_module, optimizer, batch, cfg, kick_weight, frozen_norm)
+            loss_history.append(losses)
+            policy.version += 1
+            if opponents is not None:
+                opponents.on_update(model, agent_steps, writer)
+            iteration += 1
+            if watch is not None and watch.due(iteration):
+                watch.publish(iteration, ModelPolicy(model, env_config))
+            learn_s = time.monotonic() - t1
+            busy_learning += 0.0 if first else learn_s
 
-        # ---- advantages (torchrl's GAE wants [batch, time, 1])
-        def by_row(x: torch.Tensor) -> torch.Tensor:
-            return x.transpose(0, 1).unsqueeze(-1)
-
-        advantage, value_target = generalized_advantage_estimate(
-            cfg["gamma"], cfg["lambd"], by_row(buf_val), by_row(buf_next_val), by_row(buf_rew),
-            done=by_row(buf_done), terminated=by_row(buf_term))
-        actions = torch.stack(buf_act)
-        batch = TensorDict({
-            "observation": buf_obs.transpose(0, 1).reshape(rows * horizon, model.input_dim),
-            "action": actions.transpose(0, 1).reshape(rows * horizon, *actions.shape[2:]),
-            "action_log_prob": buf_logp.transpose(0, 1).reshape(-1),
-            "advantage": advantage.reshape(-1, 1),
-            "value_target": value_target.reshape(-1, 1),
-        }, batch_size=[rows * horizon], device=device)
-        if kick_weight:
-            teacher = torch.stack(buf_teacher)
-            batch["teacher_action"] = teacher.transpose(0, 1).reshape(rows * horizon, *teacher.shape[2:]).to(device)
-
-        # ---- num_epoch passes of minibatch updates
-        model.train()
-        losses = ppo_update(model, loss_module, optimizer, batch, cfg["num_epoch"], cfg["batch_size"], kick_weight)[-1]
-        if kick_weight:
-            greedy, labels = np.stack(buf_greedy), teacher.numpy()
-            losses["teacher_weight"] = kick_weight
-            # how far the greedy learner was from the teacher on its own states (lookup: share of other rows)
-            losses["teacher_disagreement"] = float(np.mean(greedy != labels) if model.action["kind"] == "discrete"
-                                                   else np.mean((greedy - labels) ** 2))
-        if hasattr(pool, "on_update"):
-            pool.on_update(model, agent_steps, writer)
-        iteration += 1
-        if watch is not None and watch.due(iteration):
-            watch.publish(iteration, ModelPolicy(model, env_config))
-
-        # ---- progress, summaries, checkpoints
-        elapsed = time.monotonic() - start_time
-        rate = (agent_steps - start_steps) / max(elapsed, 1e-9)
-        success, ret = _episode_stats(recent)
-        bar.update(horizon * rows)
-        level = "" if difficulty is None else f"  difficulty {difficulty:.2f}"
-        bar.set_postfix_str(f"{rate:,.0f} steps/s  success {success:.0%}  return {ret:+.2f}{level}")
-        # ---- curriculum (ML-Agents' lessons): harder once the last episodes at this level succeed often enough
-        if curriculum and difficulty < 1.0 and len(recent) == SUCCESS_WINDOW and success >= curriculum["threshold"]:
-            difficulty = min(1.0, round(difficulty + curriculum["step"], 6))
-            pool.set_difficulty(difficulty)
-            recent.clear()
-            if writer is not None:
-                writer.add_scalar("curriculum/difficulty", difficulty, agent_steps)
-        if agent_steps >= next_summary or agent_steps >= cfg["max_steps"]:
-            s_success, s_ret = _episode_stats(since_summary)
-            history.append((agent_steps, s_success, s_ret, len(since_summary)))
-            _log(writer, agent_steps, s_success, s_ret, since_summary, losses, rate, optimizer, difficulty)
-            since_summary = []
-            next_summary += cfg["summary_freq"]
-        if agent_steps >= next_checkpoint:
-            _periodic_checkpoint(run_dir, model, optimizer, cfg, obs_dim, agent_steps, success, ret, difficulty)
-            next_checkpoint += cfg["checkpoint_interval"]
-    stop.restore()
-    bar.close()
-    pool.close()
-    if watch is not None:
-        watch.close()
-    if writer is not None:
-        writer.close()
+            # ---- progress, summaries, checkpoints
+            elapsed = time.monotonic() - start_time
+            rate = (agent_steps - start_steps) / max(elapsed, 1e-9)
+            success, ret = _episode_stats(recent)
+            bar.update(steps)
+            level = "" if difficulty is None else f"  difficulty {difficulty:.2f}"
+            outcome = match.describe() if opponents is not None else _describe(success, ret)
+            bar.set_postfix_str(f"{rate:,.0f} steps/s  learner {busy_learning / max(elapsed, 1e-9):.0%}  "
+                                f"{rollouts.describe()}  {outcome}{level}")
+            perf = {"collect_s": collect_s, "learn_s": learn_s, "agent_steps_per_s": rate, "policy_lag": lag}
+            speed = (rate, busy_learning / max(elapsed, 1e-9)) if not first else speed
+            # ---- curriculum (ML-Agents' lessons): harder once the last episodes at this level succeed often enough
+            if curriculum and difficulty < 1.0 and len(recent) == SUCCESS_WINDOW and success >= curriculum["threshold"]:
+                difficulty = min(1.0, round(difficulty + curriculum["step"], 6))
+                recent.clear()
+                if writer is not None:
+                    writer.add_scalar("curriculum/difficulty", difficulty, agent_steps)
+            if agent_steps >= next_summary or agent_steps >= cfg["max_steps"]:
+                s_success, s_ret = _episode_stats(since_summary)
+                history.append((agent_steps, s_success, s_ret, len(since_summary)))
+                _log(writer, agent_steps, s_success, s_ret, since_summary, losses, perf, optimizer, difficulty)
+                since_summary = []
+                next_summary += cfg["summary_freq"]
+            if agent_steps >= next_checkpoint:
+                _periodic_checkpoint(run_dir, model, optimizer, cfg, probe.obs_dim, agent_steps, success, ret,
+                                     difficulty)
+                next_checkpoint += cfg["checkpoint_interval"]
+    finally:
+        stop.restore()
+        bar.close()
+        rollouts.close()
+        if watch is not None:
+            watch.close()
+        if writer is not None:
+            writer.close()
     success, ret = _episode_stats(recent)
     metrics = {"train_success_rate": success, "train_mean_return": ret, **losses}
-    meta = checkpoint_meta(cfg, model, obs_dim, agent_steps, metrics, difficulty)
+    meta = checkpoint_meta(cfg, model, probe.obs_dim, agent_steps, metrics, difficulty)
     path = save_checkpoint(out, model, meta, optimizer)
-    return TrainResult(path, agent_steps, history)
+    return TrainResult(path, agent_steps, history, loss_history, lags, *speed)
+
+
+def sync_controls(policy: RolloutPolicy, difficulty: float | None, kickstart: bool,
+                  opponents: OpponentPool | None) -> None:
+    """The learner's decisions into the rollout policy's buffers (the workers get them with the weights)."""
+    policy.difficulty.fill_(float("nan") if difficulty is None else difficulty)
+    policy.kickstart.fill_(1.0 if kickstart else 0.0)
+    if opponents is not None:
+        probs, generations = opponents.state_tensors()
+        policy.opponent_probs.copy_(probs)
+        policy.opponent_generations.copy_(generations)
+
+
+def finished_episodes(batch: TensorDict) -> list[Episode]:
+    """Every agent episode that ended in the batch (the env marks one row per agent of a finished episode)."""
+    ended = batch.get(("next", "episode_end"))
+    if not bool(ended.any()):
+        return []
+    rows = torch.nonzero(ended)
+    returns = batch.get(("next", "episode_return"))[ended].tolist()
+    lengths = batch.get(("next", "episode_length"))[ended].tolist()
+    success = batch.get(("next", "episode_success"))[ended].tolist()
+    return [Episode(float(r), int(n), bool(s), int(row[0])) for r, n, s, row in zip(returns, lengths, success, rows)]
+
+
+class MatchTally:
+    """Self-play results as they come: PFSP's bookkeeping, the points rate over recent matches, and goals for and
+    against per minute of game time, which mean something before the first 5-minute match has ended."""
+
+    def __init__(self, rows_per_copy: int, window: int = SUCCESS_WINDOW):
+        self.rows_per_copy = rows_per_copy
+        self.points: collections.deque = collections.deque(maxlen=window)
+        self.goals_for = self.goals_against = 0
+        self.minutes = 0.0
+
+    def add(self, batch: TensorDict, decision_s: float, opponents: OpponentPool) -> None:
+        nxt = batch.get("next")
+        ended = nxt.get("match_end")
+        for opponent, generation, points in zip(nxt.get("match_opponent")[ended].tolist(),
+                                                nxt.get("match_generation")[ended].tolist(),
+                                                nxt.get("match_points")[ended].tolist()):
+            opponents.record(opponent, generation, points)
+            self.points.append(points)
+        self.goals_for += int(nxt.get("goals_for").sum())
+        self.goals_against += int(nxt.get("goals_against").sum())
+        copies = batch.shape[0] // self.rows_per_copy
+        self.minutes += copies * batch.shape[1] * decision_s / 60.0
+
+    def describe(self) -> str:
+        minutes = max(self.minutes, 1e-9)
+        per_min = f"goals/min {self.goals_for / minutes:.2f}-{self.goals_against / minutes:.2f}"
+        if not self.points:
+            return per_min
+        return f"{per_min}  points {float(np.mean(self.points)):.0%} ({len(self.points)} matches)"
+
+
+def learn(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim.Optimizer, batch: TensorDict,
+          cfg: dict[str, Any], kick_weight: float, frozen_norm: bool) -> dict[str, float]:
+    """GAE over the batch ``[rows, T]`` and ``num_epoch`` passes of PPO minibatches; the last pass's losses."""
+    rows, horizon = batch.shape
+    obs = batch.get("observation")
+    nxt = batch.get("next")
+    flat_obs = obs.reshape(rows * horizon, -1)
+    with torch.no_grad():
+        x = model.obs_norm(flat_obs)  # the statistics the workers acted with
+        value = model.value(x).reshape(rows, horizon, 1)
+        next_value = model.value(model.obs_norm(nxt.get("observation").reshape(rows * horizon, -1)))
+        next_value = next_value.reshape(rows, horizon, 1)
+    reward = nxt.get("reward") * cfg["strength"] + nxt.get("shaping").unsqueeze(-1)
+    cut = torch.zeros((rows, horizon, 1), dtype=torch.bool)
+    cut[:, cfg["time_horizon"] - 1::cfg["time_horizon"]] = True  # trajectories cut every time_horizon decisions
+    advantage, value_target = generalized_advantage_estimate(
+        cfg["gamma"], cfg["lambd"], value, next_value, reward, done=nxt.get("done") | cut,
+        terminated=nxt.get("terminated"))
+    if not frozen_norm:
+        model.obs_norm.update(flat_obs)
+    action = batch.get("action")
+    flat = TensorDict({"observation": x,
+                       "action": action.reshape(rows * horizon, *action.shape[2:]),
+                       "action_log_prob": batch.get("action_log_prob").reshape(-1),
+                       "advantage": advantage.reshape(-1, 1), "value_target": value_target.reshape(-1, 1)},
+                      batch_size=[rows * horizon])
+    if kick_weight:
+        teacher = batch.get("teacher_action")
+        flat["teacher_action"] = teacher.reshape(rows * horizon, *teacher.shape[2:])
+    model.train()
+    losses = ppo_update(model, loss_module, optimizer, flat, cfg["num_epoch"], cfg["batch_size"], kick_weight)[-1]
+    model.eval()
+    if kick_weight:
+        with torch.no_grad():
+            greedy = (model.policy(flat["observation"]).argmax(-1) if model.action["kind"] == "discrete"
+                      else model.policy(flat["observation"])[0].clamp(-1.0, 1.0))
+        labels = flat["teacher_action"]
+        losses["teacher_weight"] = kick_weight
+        # how far the greedy learner is from the teacher on its own states (lookup: share of other rows)
+        losses["teacher_disagreement"] = float((greedy != labels).float().mean() if model.action["kind"] == "discrete"
+                                               else ((greedy - labels) ** 2).mean())
+    return losses
+
+
+def _describe(success: float, ret: float) -> str:
+    if np.isnan(success):
+        return "no episode ended yet"
+    return f"success {success:.0%}  return {ret:+.2f}"
 
 
 LOSS_KEYS = ("loss_objective", "loss_critic", "loss_entropy", "entropy")
@@ -306,7 +407,7 @@ def _summary_writer(run_dir: Path):
     return SummaryWriter(str(run_dir))
 
 
-def _log(writer, steps: int, success: float, ret: float, episodes: list, losses: dict, rate: float,
+def _log(writer, steps: int, success: float, ret: float, episodes: list, losses: dict, perf: dict[str, float],
          optimizer: torch.optim.Optimizer, difficulty: float | None) -> None:
     if writer is None:
         return
@@ -318,7 +419,8 @@ def _log(writer, steps: int, success: float, ret: float, episodes: list, losses:
         writer.add_scalar("episode/length", float(np.mean([e.length for e in episodes])), steps)
     for key, value in losses.items():
         writer.add_scalar(f"kickstart/{key}" if key.startswith("teacher_") else f"loss/{key}", value, steps)
-    writer.add_scalar("perf/agent_steps_per_s", rate, steps)
+    for key, value in perf.items():
+        writer.add_scalar(f"perf/{key}", value, steps)
     writer.add_scalar("train/learning_rate", optimizer.param_groups[0]["lr"], steps)
     writer.flush()
 

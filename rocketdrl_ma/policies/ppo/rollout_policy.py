@@ -1,0 +1,90 @@
+"""The policy every rollout worker runs: the learner's actor, plus what the learner decides for the games.
+
+torchrl's collectors ship one thing to their workers each iteration, the policy's weights
+(``update_policy_weights_()``), so everything a worker must learn from the learner lives in this module as a
+parameter or a buffer, and reaches the env as keys the module writes next to ``action`` (``rollout.py``):
+
+- the learner (``PPOModel``: normaliser statistics, policy and value networks): ``action`` and
+  ``action_log_prob`` sampled as ``ClipPPOLoss`` will score them;
+- ``difficulty`` (a minigame curriculum's level; NaN: none) and ``kickstart`` (whether the teacher's labels
+  are wanted) as ``ctl_difficulty`` / ``ctl_kickstart``; ``version`` (updates so far) as ``policy_version``,
+  from which the learner reads the policy lag of asynchronous collection;
+- in self-play, the opponents: the snapshot slots' networks (``selfplay/pool.py``), the chance of every
+  opponent index for a new episode and each slot's generation. A copy that begins an episode gets its
+  opponent from the env's uniform draw (inverse CDF: one draw, one opponent, the same for all its rows), and
+  every network opponent's action is sampled here, one batched forward per network.
+"""
+from __future__ import annotations
+
+import torch
+from tensordict import TensorDictBase
+from tensordict.nn import TensorDictModuleBase
+from torch import nn
+from torchrl.envs.utils import ExplorationType, exploration_type
+
+from .model import PPOModel, sample_env_actions
+
+
+class RolloutPolicy(TensorDictModuleBase):
+    def __init__(self, model: PPOModel, slot_models: nn.ModuleList | None = None, n_opponents: int = 0):
+        super().__init__()
+        self.model = model
+        self.slots = slot_models if slot_models is not None else nn.ModuleList()
+        self.selfplay = n_opponents > 0
+        self.n_scripted = n_opponents - 1 - len(self.slots) if self.selfplay else 0
+        self.register_buffer("difficulty", torch.tensor(float("nan")))
+        self.register_buffer("kickstart", torch.tensor(0.0))
+        self.register_buffer("version", torch.tensor(0, dtype=torch.int64))
+        self.register_buffer("opponent_probs", torch.zeros(max(n_opponents, 1)))
+        self.register_buffer("opponent_generations", torch.zeros(max(n_opponents, 1), dtype=torch.int64))
+        self.in_keys = ["observation"] + (["opponent_observation", "opponent_id", "episode_start", "opponent_draw"]
+                                          if self.selfplay else [])
+        self.out_keys = ["action", "action_log_prob", "ctl_difficulty", "ctl_kickstart", "policy_version"] + (
+            ["opponent_id", "opponent_generation", "opponent_action"] if self.selfplay else [])
+
+    @torch.no_grad()
+    def forward(self, tensordict: TensorDictBase) -> TensorDictBase:
+        rows = tensordict.batch_size
+        action, log_prob = self.sample(self.model.obs_norm(tensordict.get("observation")))
+        tensordict.set("action", action)
+        tensordict.set("action_log_prob", log_prob)
+        tensordict.set("ctl_difficulty", self.difficulty.expand(rows).clone())
+        tensordict.set("ctl_kickstart", self.kickstart.expand(rows).clone())
+        tensordict.set("policy_version", self.version.expand(rows).clone())
+        if self.selfplay:
+            self._opponents(tensordict)
+        return tensordict
+
+    def sample(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """The learner's action and its log-probability for normalised inputs ``x``: the distributions of the
+        model's torchrl actor (``PPOModel.td_modules``, which ``ClipPPOLoss`` scores), built here without its
+        tensordict plumbing, which cost as much as the rest of a worker's decision. Greedy under torchrl's
+        deterministic exploration type."""
+        if self.model.action["kind"] == "box":
+            loc, scale = self.model.policy(x)
+            dist = torch.distributions.Independent(torch.distributions.Normal(loc, scale), 1)
+            greedy = loc
+        else:
+            logits = self.model.policy(x)
+            dist = torch.distributions.Categorical(logits=logits)
+            greedy = logits.argmax(-1)
+        action = greedy if exploration_type() == ExplorationType.DETERMINISTIC else dist.sample()
+        return action, dist.log_prob(action)
+
+    def _opponents(self, tensordict: TensorDictBase) -> None:
+        cdf = torch.cumsum(self.opponent_probs, 0)
+        chosen = torch.searchsorted(cdf, tensordict.get("opponent_draw").contiguous(), right=True)
+        chosen = chosen.clamp(max=len(cdf) - 1)
+        opponent = torch.where(tensordict.get("episode_start"), chosen, tensordict.get("opponent_id"))
+        tensordict.set("opponent_id", opponent)
+        tensordict.set("opponent_generation", self.opponent_generations[opponent])
+        obs = tensordict.get("opponent_observation")
+        action = torch.zeros_like(tensordict.get("action"))
+        first_slot = 1 + self.n_scripted
+        for index in torch.unique(opponent).tolist():
+            if 1 <= index < first_slot:
+                continue  # a scripted bot: the env acts for it
+            network = self.model if index == 0 else self.slots[index - first_slot]
+            rows = opponent == index
+            action[rows] = torch.as_tensor(sample_env_actions(network, obs[rows])).to(action.dtype)
+        tensordict.set("opponent_action", action)

@@ -1,0 +1,177 @@
+"""The rollout workers of a training run, on torchrl's collectors.
+
+``n_workers`` 0 steps the env copies in the trainer's own process (torchrl's ``Collector``); N >= 1 gives N
+worker processes (``MultiSyncCollector``, or ``MultiAsyncCollector`` with ``asynchronous``), each owning
+``ceil(n_envs / N)`` copies (``rollout.py``) and a copy of the ``RolloutPolicy``; ``ray`` puts the N workers
+on a Ray cluster instead (``RayCollector``). Whatever the backend, a batch comes back as one ``TensorDict``
+``[rows, T]`` (rows first, then decisions), and ``update_weights`` ships the policy (learner, opponents and
+the learner's decisions: ``rollout_policy.py``) to every worker.
+
+Faults: a worker that dies (a crash, an OOM kill, ``kill -9``) makes torchrl's collector raise; the batch being
+collected is dropped, the collector is rebuilt with fresh workers, and collection goes on. A run whose workers
+keep dying (``MAX_RESTARTS`` in a row without a batch in between) stops with the error.
+"""
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tensordict import TensorDictBase
+
+from .rollout import RolloutEnvFactory, worker_copies
+from .rollout_policy import RolloutPolicy
+
+log = logging.getLogger(__name__)
+MAX_RESTARTS = 5
+
+
+def default_workers() -> int:
+    """The machine's usable cores (the CPU affinity of this process where the OS has one)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # macOS, Windows
+        return max(1, os.cpu_count() or 1)
+
+
+@dataclass
+class WorkerPlan:
+    """How a run's env copies are spread: ``n_workers`` (0: in-process) and where (``ray``: an address or
+    ``auto``; None: local processes)."""
+
+    n_workers: int
+    asynchronous: bool = False
+    ray: str | None = None
+
+    @property
+    def processes(self) -> int:
+        return max(1, self.n_workers)
+
+
+class Rollouts:
+    def __init__(self, cfg: dict[str, Any], policy: RolloutPolicy, plan: WorkerPlan, rows_per_copy: int):
+        self.cfg, self.policy, self.plan = cfg, policy, plan
+        self.copies = worker_copies(cfg["n_envs"], plan.processes)
+        self.rows_per_worker = self.copies * rows_per_copy
+        self.rows = self.rows_per_worker * plan.processes
+        if plan.asynchronous:  # every worker's batch is one update's buffer
+            self.horizon = max(1, cfg["buffer_size"] // self.rows_per_worker)
+        else:
+            self.horizon = max(1, cfg["buffer_size"] // self.rows)
+        self.restarts = 0
+        self._collector = None
+        self._iterator: Iterator | None = None
+
+    # ------------------------------------------------------------------ building the collector
+    def _factories(self) -> list[RolloutEnvFactory]:
+        in_worker = self.plan.n_workers > 0
+        return [RolloutEnvFactory(self.cfg, self.copies, w, seed_torch=in_worker) for w in range(self.plan.processes)]
+
+    def _build(self):
+        from torchrl.collectors import Collector, MultiAsyncCollector, MultiSyncCollector
+
+        per_worker = self.rows_per_worker * self.horizon
+        if self.plan.ray is not None:
+            return self._build_ray(per_worker)
+        if self.plan.n_workers == 0:
+            return Collector(self._factories()[0](), self.policy, frames_per_batch=per_worker, total_frames=-1,
+                             auto_register_policy_transforms=False)
+        if self.plan.asynchronous:
+            return MultiAsyncCollector(self._factories(), self.policy, frames_per_batch=per_worker, total_frames=-1)
+        return MultiSyncCollector(self._factories(), self.policy, frames_per_batch=per_worker * self.plan.processes,
+                                  total_frames=-1, cat_results=0)
+
+    def _build_ray(self, per_worker: int):
+        from torchrl.collectors.distributed import RayCollector
+
+        import rocketdrl_ma
+
+        package = str(Path(rocketdrl_ma.__file__).resolve().parent)
+        init = {"address": None if self.plan.ray == "auto" else self.plan.ray,
+                # the workers import this very package, shipped by Ray to nodes that lack it
+                "runtime_env": {"py_modules": [package], "env_vars": {"RL_WARNINGS": "0"}},
+                "log_to_driver": False}
+        return RayCollector(self._factories(), self.policy, frames_per_batch=per_worker * self.plan.processes,
+                            total_frames=2 ** 62, sync=not self.plan.asynchronous, num_collectors=self.plan.processes,
+                            ray_init_config=init,
+                            remote_configs={"num_cpus": 1, "num_gpus": 0, "memory": 1024 ** 3})
+
+    # ------------------------------------------------------------------ batches
+    def next_batch(self) -> TensorDictBase:
+        """The next batch ``[rows, T]``; a worker fault drops the batch in progress and rebuilds the workers."""
+        while True:
+            if self._iterator is None:
+                self._collector = self._build()
+                if self.plan.n_workers > 0:  # the workers start from the learner's weights and decisions
+                    self._collector.update_policy_weights_()
+                self._iterator = iter(self._collector)
+            try:
+                batch = next(self._iterator)
+            except (RuntimeError, EOFError, BrokenPipeError, ConnectionError, OSError) as error:
+                self.restarts += 1
+                consecutive = getattr(self, "_consecutive", 0) + 1
+                self._consecutive = consecutive
+                log.warning("rollout workers failed (%s); restarting them (%d)", error, self.restarts)
+                self._shutdown_quietly()
+                if consecutive > MAX_RESTARTS:
+                    raise RuntimeError(f"rollout workers failed {consecutive} times in a row: {error}") from error
+                continue
+            self._consecutive = 0
+            return batch.reshape(-1, batch.shape[-1]) if batch.ndim > 2 else batch
+
+    def update_weights(self) -> None:
+        """Ship the policy (weights and buffers) to every worker."""
+        if self._collector is not None and self.plan.n_workers > 0:
+            self._collector.update_policy_weights_()
+
+    def set_difficulty(self, level: float | None) -> None:
+        """Where a minigame curriculum stands: workers (re)built from now on start their games at this level;
+        running ones get it through the policy (``ctl_difficulty``)."""
+        if level is not None and self.cfg["env"].get("difficulty") != level:
+            self.cfg = {**self.cfg, "env": {**self.cfg["env"], "difficulty": level}}
+
+    def describe(self) -> str:
+        if self.plan.n_workers == 0:
+            return "in-process"
+        where = " on Ray" if self.plan.ray is not None else ""
+        return f"workers {self.workers_alive()}/{self.plan.processes}{where}"
+
+    def workers_alive(self) -> int:
+        if self.plan.n_workers == 0 or self._collector is None:
+            return self.plan.processes
+        procs = getattr(self._collector, "procs", None)
+        if procs is None:  # Ray: its actors are supervised by Ray
+            return self.plan.processes
+        alive = 0
+        for proc in procs:
+            try:
+                alive += int(proc.is_alive())
+            except ValueError:  # closed
+                pass
+        return alive
+
+    def worker_pids(self) -> list[int]:
+        procs = getattr(self._collector, "procs", None) or []
+        return [p.pid for p in procs]
+
+    def _shutdown_quietly(self) -> None:
+        collector, self._collector, self._iterator = self._collector, None, None
+        if collector is None:
+            return
+        try:
+            collector.shutdown()
+        except Exception as error:  # a dead worker's pipes: the rest still gets stopped
+            log.warning("while stopping the rollout workers: %s", error)
+        for proc in getattr(collector, "procs", None) or []:
+            try:
+                if proc.is_alive():
+                    proc.kill()
+                    proc.join(timeout=5)
+            except ValueError:  # already closed by the collector's shutdown
+                pass
+
+    def close(self) -> None:
+        self._shutdown_quietly()

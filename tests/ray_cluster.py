@@ -1,0 +1,49 @@
+"""A real local Ray cluster for the tests that train or play leagues on Ray."""
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import psutil
+
+
+class LocalRayCluster:
+    """A real two-node Ray cluster on 127.0.0.1 (a head and a second node, one CPU each), started with ``ray start``
+    and stopped by the PIDs of every process that carries its own temp folder or port."""
+
+    def __init__(self, port: int):
+        # Ray's Unix sockets live under its temp folder, and a socket path may not exceed 107 bytes: pytest's
+        # tmp_path is too deep, a fresh folder in the system's temp directory is not
+        self.port, self.temp = port, Path(tempfile.mkdtemp(prefix="ray"))
+        self.ray = str(Path(sys.executable).with_name("ray"))
+        common = ["--num-cpus=1", "--object-store-memory=150000000", "--disable-usage-stats",
+                  "--node-ip-address=127.0.0.1"]
+        subprocess.run([self.ray, "start", "--head", f"--port={port}", f"--temp-dir={self.temp}",
+                        "--include-dashboard=false", *common], check=True, capture_output=True, timeout=120)
+        subprocess.run([self.ray, "start", f"--address=127.0.0.1:{port}", *common], check=True,
+                       capture_output=True, timeout=120)
+
+    @property
+    def address(self) -> str:
+        return f"127.0.0.1:{self.port}"
+
+    def processes(self) -> list[psutil.Process]:
+        marks = (str(self.temp), f"127.0.0.1:{self.port}", f"--gcs-address=127.0.0.1:{self.port}")
+        found = []
+        for proc in psutil.process_iter(["cmdline"]):
+            cmdline = " ".join(proc.info["cmdline"] or ())
+            if any(mark in cmdline for mark in marks) and proc.pid != psutil.Process().pid:
+                found.append(proc)
+        return found
+
+    def stop(self) -> None:
+        for proc in self.processes():
+            try:
+                proc.kill()
+            except psutil.NoSuchProcess:
+                pass
+        psutil.wait_procs(self.processes(), timeout=20)
+        shutil.rmtree(self.temp, ignore_errors=True)
