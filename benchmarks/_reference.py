@@ -99,7 +99,8 @@ def bare_pybullet_runner(team_size: int, n_arenas: int = 1, seed: int = 0,
                 arena.add_car(team=team)
         arena.reset_kickoff(seed=seed)
     client = batch.client
-    bodies, cars = batch._ball_bodies + batch._car_bodies, batch._car_bodies
+    balls, cars = batch.pybullet_bodies()
+    bodies = balls + cars
     still = [0.0, 0.0, 0.0]
 
     def run(decisions: int) -> None:

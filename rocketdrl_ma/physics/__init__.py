@@ -2,10 +2,14 @@
 
 Imports nothing else of the package: rules, env, server and policies build on this, never the reverse.
 """
-from .arena import Arena, Ball, Car
-from .batch import ArenaBatch
+from .arena import Arena, Ball, BoostPad, Car
+from .batch import ArenaBatch, BatchArrays
 from .car_config import PRESETS, CarConfig, get_preset
-from .state import BallState, CarControls, CarState, yaw_rot_mat
+from .events import BallTouch, BoostPickup, Bump, CarHit, Demo, PhysicsEvent, PhysicsEventKind
+from .mutators import DemoMode, MutatorConfig
+from .state import BallHitInfo, BallState, BoostPadState, CarControls, CarExtraState, CarState, yaw_rot_mat
 
-__all__ = ["Arena", "ArenaBatch", "Ball", "BallState", "Car", "CarConfig", "CarControls", "CarState", "PRESETS",
+__all__ = ["Arena", "ArenaBatch", "Ball", "BallHitInfo", "BallState", "BallTouch", "BatchArrays", "BoostPad",
+           "BoostPadState", "BoostPickup", "Bump", "Car", "CarConfig", "CarControls", "CarExtraState", "CarHit",
+           "CarState", "Demo", "DemoMode", "MutatorConfig", "PRESETS", "PhysicsEvent", "PhysicsEventKind",
            "get_preset", "yaw_rot_mat"]

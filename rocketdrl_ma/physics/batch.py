@@ -8,6 +8,7 @@ of one. Rocket League units (uu) everywhere outside this module's PyBullet calls
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 import pybullet as pb
@@ -17,8 +18,12 @@ from . import constants as C
 from .arena_geometry import arena_mesh
 from .body_io import read_rows, unpack_rows
 from .car_config import CarConfig, get_preset
-from .car_kernel import (CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER, CS_IS_DEMOED, CS_IS_SUPERSONIC, CS_ON_GROUND, CS_SIZE, boost_pad_tick,
-                         car_post_tick, car_pre_tick, interp)
+from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER,
+                         CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_SUPERSONIC,
+                         CS_ON_GROUND, CS_SIZE, boost_pad_tick, car_post_tick, car_pre_tick, interp)
+from .events import BallTouch, BoostPickup, Bump, Demo, PhysicsEvent
+from .mutators import MUT_BALL_MAX_SPEED, DemoMode, MutatorConfig
+from .state import BallHitInfo
 
 M_PER_UU = 1.0 / C.UU_PER_M
 ARENA_SPACING_UU = 20000.0  # arenas are ~8200 x 12000 uu; the gap keeps every body in its own arena
@@ -33,7 +38,7 @@ _BUMP_UP = np.array(C.BUMP_UPWARD_VEL_CURVE)
 
 
 @njit(cache=True)
-def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty):
+def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty, mut):
     """Hold frozen balls still and apply the speed and spin caps; ``dirty`` marks balls to write back.
 
     Returns how many are dirty."""
@@ -46,8 +51,9 @@ def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty):
             ang_vel[k] = 0.0
             continue
         speed = np.sqrt(vel[k, 0] ** 2 + vel[k, 1] ** 2 + vel[k, 2] ** 2)
-        if speed > C.BALL_MAX_SPEED:
-            vel[k] *= C.BALL_MAX_SPEED / speed
+        max_speed = mut[k, MUT_BALL_MAX_SPEED]
+        if speed > max_speed:
+            vel[k] *= max_speed / speed
             dirty[k] = True
         spin = np.sqrt(ang_vel[k, 0] ** 2 + ang_vel[k, 1] ** 2 + ang_vel[k, 2] ** 2)
         if spin > C.BALL_MAX_ANG_SPEED:
@@ -59,17 +65,16 @@ def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty):
 
 @njit(cache=True)
 def post_tick_kernels(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen_pos, ball_dirty, car_pos, car_vel,
-                      car_ang_vel, car_arena, car_active, cs, pads_enabled, pad_timer, pad_picked, dt):
-    """The compiled after-step work of one tick in one call: ``ball_post_tick``, ``car_post_tick`` and, when pads are
-    enabled, ``boost_pad_tick``. Returns (balls to write back, cars due to respawn, pads picked up)."""
-    n_dirty = ball_post_tick(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen_pos, ball_dirty)
+                      car_ang_vel, car_arena, car_active, cs, pad_timer, pad_picked, pad_gained, mut, dt):
+    """The compiled after-step work of one tick in one call: ``ball_post_tick``, ``car_post_tick`` and
+    ``boost_pad_tick``. Returns (balls to write back, cars due to respawn, pads picked up)."""
+    n_dirty = ball_post_tick(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen_pos, ball_dirty, mut)
     respawn_due = 0
     n_picked = 0
     if car_pos.shape[0] > 0:
         respawn_due = car_post_tick(car_vel, car_ang_vel, car_active, cs, dt)
-        if pads_enabled:
-            n_picked = boost_pad_tick(car_pos, car_arena, car_active, cs, C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG,
-                                      pad_timer, pad_picked, dt)
+        n_picked = boost_pad_tick(car_pos, car_arena, car_active, cs, C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG,
+                                  pad_timer, pad_picked, pad_gained, mut, dt)
     return n_dirty, respawn_due, n_picked
 
 
@@ -107,14 +112,43 @@ def _box_vector(name: str, value) -> np.ndarray:
     return arr
 
 
+def _read_only(a: np.ndarray) -> np.ndarray:
+    view = a.view()
+    view.flags.writeable = False
+    return view
+
+
+class BatchArrays(NamedTuple):
+    """``ArenaBatch.arrays()``: cars by batch row, balls and pad timers by arena (uu, uu/s, rad/s, s). The car
+    state columns are floats, nonzero where the ``CarState`` flag of the same name is set."""
+    car_pos: np.ndarray            # (cars, 3)
+    car_vel: np.ndarray
+    car_ang_vel: np.ndarray
+    car_rot: np.ndarray            # (cars, 3, 3), columns forward, right, up
+    car_boost: np.ndarray          # (cars,)
+    car_on_ground: np.ndarray
+    car_has_jumped: np.ndarray
+    car_has_double_jumped: np.ndarray
+    car_has_flipped: np.ndarray
+    car_air_time_since_jump: np.ndarray
+    car_is_demoed: np.ndarray
+    car_arena: np.ndarray          # (cars,) int: the arena of each car
+    ball_pos: np.ndarray           # (arenas, 3)
+    ball_vel: np.ndarray
+    ball_ang_vel: np.ndarray
+    pad_timers: np.ndarray         # (arenas, 34): seconds until each pad is active again, 0 = active
+
+
 class _CarSlot:
     """Bookkeeping of one car body; its per-tick numbers live in the batch arrays at ``index``."""
 
     def __init__(self, car_id: int, arena: int, team: int, config: CarConfig, body: int):
         self.car_id, self.arena, self.team, self.config, self.body = car_id, arena, team, config, body
         self.index = -1
-        self.last_ball_hit_tick = -10
+        self.last_ball_hit_tick = -10  # the last tick the extra hit impulse was applied
+        self.ball_hit: BallHitInfo | None = None
         self.cooldown_until: dict[int, int] = {}  # other car id -> tick when bumps may happen again
+        self.last_victim: int | None = None  # the car this one last bumped or demolished
 
 
 class ArenaBatch:
@@ -134,8 +168,8 @@ class ArenaBatch:
         self.tick_rate = tick_rate
         self.dt = 1.0 / tick_rate
         self.tick_count = 0
-        self.demos_enabled = True  # switches a game mode may turn off
-        self.boost_pads_enabled = True
+        self._mutators = [MutatorConfig()] * n_arenas
+        self.mutator_rows = np.tile(self._mutators[0].as_row(), (n_arenas, 1))
         self.rng = np.random.default_rng(seed)
         # Each arena's own random stream (respawn spots, unseeded kickoffs); all share ``rng`` unless given their
         # own, which makes an arena of a batch draw exactly what a lone Arena with that seed draws.
@@ -170,7 +204,7 @@ class ArenaBatch:
         self._next_car_id = 0
         self._rebuild_car_arrays()
         self._state_fresh = False
-        self.events: list[tuple] = []  # (tick, kind, ...) since the last clear_events()
+        self._events: list[list[PhysicsEvent]] = [[] for _ in range(n_arenas)]  # per arena, since the last drain
         self.arenas = [Arena._view(self, k) for k in range(n_arenas)]
         for k in range(n_arenas):
             self.set_ball(k, np.array([0.0, 0.0, C.BALL_REST_Z]), np.zeros(3), np.zeros(3))
@@ -228,7 +262,7 @@ class ArenaBatch:
         self._slot_by_id[slot.car_id] = slot
         old = self._snapshot_car_arrays()
         self._rebuild_car_arrays(old)
-        self.cs[slot.index, CS_BOOST] = C.BOOST_SPAWN_AMOUNT
+        self.cs[slot.index, CS_BOOST] = self._mutators[arena].car_spawn_boost
         self._read_state()
         return slot.car_id
 
@@ -268,6 +302,7 @@ class ArenaBatch:
         self.car_team = np.array([s.team for s in self._slots], dtype=np.int64)
         self.car_active = np.ones(n, dtype=np.bool_)
         self.pad_picked = np.full(n, -1, dtype=np.int64)
+        self.pad_gained = np.zeros(n)
         wheels = [s.config.wheel_table() for s in self._slots]
         self.wheel_conn = np.array([w["connection"] for w in wheels]).reshape(n, 4, 3)
         self.wheel_rest = np.array([w["rest_length"] for w in wheels]).reshape(n, 4)
@@ -382,7 +417,8 @@ class ArenaBatch:
                 unwritable = car_pre_tick(self.car_pos, self.car_rot, self.car_vel, self.car_ang_vel, self.controls,
                                           self.wheel_conn, self.wheel_rest, self.wheel_radius, self.wheel_ray_len,
                                           self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
-                                          self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs, self.dt)
+                                          self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs,
+                                          self.mutator_rows, self.dt)
                 self._write_car_velocities(unwritable == 0)
             frozen = self.ball_frozen.nonzero()[0]
             if len(frozen):
@@ -405,22 +441,25 @@ class ArenaBatch:
         n_dirty, respawn_due, picked = post_tick_kernels(
             self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos, self._ball_dirty,
             self.car_pos, self.car_vel, self.car_ang_vel, self.car_arena, self.car_active, self.cs,
-            self.boost_pads_enabled, self.pad_timer, self.pad_picked, self.dt)
+            self.pad_timer, self.pad_picked, self.pad_gained, self.mutator_rows, self.dt)
         if n_dirty:
             for k in self._ball_dirty.nonzero()[0].tolist():
                 self._write_ball(k)
         if picked:
-            for k in np.flatnonzero(self.pad_picked >= 0):
-                self.events.append((self.tick_count, "boost_pickup", self._slots[k].car_id, int(self.pad_picked[k])))
+            for k in np.flatnonzero(self.pad_picked >= 0).tolist():
+                slot = self._slots[k]
+                self._events[slot.arena].append(BoostPickup(self.tick_count, slot.arena, slot.car_id,
+                                                            int(self.pad_picked[k]), float(self.pad_gained[k])))
         if respawn_due:
             for k in np.flatnonzero(self.cs[:, CS_IS_DEMOED] > 0.5):
                 if self.cs[k, CS_DEMO_TIMER] <= 0.0:
                     self.respawn(self._slots[k].car_id)
 
-    def _classify_contacts(self, contacts: tuple) -> tuple[set[tuple[int, int]], dict[tuple[int, int], tuple]]:
-        """This tick's contact points as ball touches {(car body, arena)} and car-car hits {(body a, body b): contact
-        points}; a hitbox touching the arena is recorded for auto-flip and auto-roll here."""
-        touches: set[tuple[int, int]] = set()
+    def _classify_contacts(self, contacts: tuple) -> tuple[dict[tuple[int, int], tuple], dict[tuple[int, int], tuple]]:
+        """This tick's contact points as ball touches {(car body, arena): (point on the ball, normal, its sign)}
+        and car-car hits {(body a, body b): contact points}, each with its first contact point; a hitbox touching
+        the arena is recorded for auto-flip and auto-roll here."""
+        touches: dict[tuple[int, int], tuple] = {}
         car_pairs: dict[tuple[int, int], tuple] = {}
         if not contacts:
             return touches, car_pairs
@@ -428,9 +467,10 @@ class ArenaBatch:
         for c in contacts:
             a, b = c[1], c[2]
             if a in ball_arena or b in ball_arena:
-                ball, other = (a, b) if a in ball_arena else (b, a)
+                # PyBullet's normal points from body b to body a.
+                ball, other, point, sign = (a, b, c[5], 1.0) if a in ball_arena else (b, a, c[6], -1.0)
                 if other in slot_by_body:
-                    touches.add((other, ball_arena[ball]))
+                    touches.setdefault((other, ball_arena[ball]), (point, c[7], sign))
             elif a in slot_by_body and b in slot_by_body:
                 car_pairs.setdefault((a, b), (c[5], c[6]))
             elif a in self._static_set or b in self._static_set:
@@ -442,39 +482,46 @@ class ArenaBatch:
                     self.cs[slot.index, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3] = np.multiply(c[7], sign)
         return touches, car_pairs
 
-    def _hits(self, touches: set[tuple[int, int]], car_pairs: dict[tuple[int, int], tuple]) -> None:
+    def _hits(self, touches: dict[tuple[int, int], tuple], car_pairs: dict[tuple[int, int], tuple]) -> None:
         """Ball hits and car-car bumps or demolitions of this tick's contacts, after the bodies were read."""
         slot_by_body = self._slot_by_body
-        for body, k in sorted(touches):
+        for (body, k), (point_m, normal, sign) in sorted(touches.items()):
             if self.ball_frozen[k]:  # the tick's read skipped it: its state after the step is needed now
                 self.ball_frozen[k] = False
                 self._read_bodies([self._ball_bodies[k]], np.array([k], dtype=np.int64))
-            self._ball_hit(slot_by_body[body], k)
+            point = np.array(point_m) * C.UU_PER_M - self.origins[k]
+            self._ball_hit(slot_by_body[body], k, point, np.multiply(normal, sign))
         for (a, b), (pos_on_a, pos_on_b) in sorted(car_pairs.items()):
             sa, sb = slot_by_body[a], slot_by_body[b]
             self._car_hit(sa, sb, np.array(pos_on_a) * C.UU_PER_M - self.origins[sa.arena])
             self._car_hit(sb, sa, np.array(pos_on_b) * C.UU_PER_M - self.origins[sb.arena])
 
-    def _ball_hit(self, slot: _CarSlot, arena: int) -> None:
-        """Rocket League's extra push on a car touch, at most once every other tick per car."""
+    def _ball_hit(self, slot: _CarSlot, arena: int, point: np.ndarray, normal: np.ndarray) -> None:
+        """Record a car's touch and give Rocket League's extra push, at most once every other tick per car."""
         k = slot.index
-        self.events.append((self.tick_count, "ball_touch", slot.car_id))
-        if self.tick_count <= slot.last_ball_hit_tick + C.BALL_HIT_MIN_TICK_GAP - 1:
-            return
-        slot.last_ball_hit_tick = self.tick_count
         car_pos, car_vel, ball_pos, ball_vel = self._pre_step
-        rel_pos = ball_pos[arena] - car_pos[k]
-        rel_vel = ball_vel[arena] - car_vel[k]
-        rel_speed = min(float(np.linalg.norm(rel_vel)), C.BALL_HIT_MAX_REL_SPEED)
-        if rel_speed <= 0.0:
-            return
-        hit_dir = np.array([rel_pos[0], rel_pos[1], rel_pos[2] * C.BALL_HIT_Z_SCALE])
-        hit_dir /= np.linalg.norm(hit_dir)
-        fwd = self.car_rot[k][:, 0]
-        hit_dir -= fwd * ((1.0 - C.BALL_HIT_FORWARD_SCALE) * (hit_dir @ fwd))
-        hit_dir /= np.linalg.norm(hit_dir)
-        self.ball_vel[arena] += hit_dir * rel_speed * interp(_BALL_HIT_CURVE, rel_speed)
-        self._write_ball(arena)
+        added = np.zeros(3)
+        extra = self.tick_count > slot.last_ball_hit_tick + C.BALL_HIT_MIN_TICK_GAP - 1
+        if extra:
+            slot.last_ball_hit_tick = self.tick_count
+            rel_pos = ball_pos[arena] - car_pos[k]
+            rel_vel = ball_vel[arena] - car_vel[k]
+            rel_speed = min(float(np.linalg.norm(rel_vel)), C.BALL_HIT_MAX_REL_SPEED)
+            if rel_speed > 0.0:
+                hit_dir = np.array([rel_pos[0], rel_pos[1], rel_pos[2] * C.BALL_HIT_Z_SCALE])
+                hit_dir /= np.linalg.norm(hit_dir)
+                fwd = self.car_rot[k][:, 0]
+                hit_dir -= fwd * ((1.0 - C.BALL_HIT_FORWARD_SCALE) * (hit_dir @ fwd))
+                hit_dir /= np.linalg.norm(hit_dir)
+                added = hit_dir * rel_speed * interp(_BALL_HIT_CURVE, rel_speed) \
+                    * self._mutators[arena].ball_hit_extra_force_scale
+                self.ball_vel[arena] += added
+                self._write_ball(arena)
+        slot.ball_hit = BallHitInfo(tick=self.tick_count, extra_impulse_tick=slot.last_ball_hit_tick,
+                                    relative_pos_on_ball=tuple((point - ball_pos[arena]).tolist()),
+                                    ball_pos=tuple(ball_pos[arena].tolist()), extra_hit_vel=tuple(added.tolist()))
+        self._events[arena].append(BallTouch(self.tick_count, arena, slot.car_id, tuple(point.tolist()),
+                                             tuple(normal.tolist()), extra))
 
     def _car_hit(self, a: _CarSlot, b: _CarSlot, contact_uu: np.ndarray) -> None:
         """Car ``a`` bumping or demolishing car ``b`` (RocketSim's car-car rules)."""
@@ -496,22 +543,31 @@ class ArenaBatch:
         local = self.car_rot[ia].T @ (contact_uu - self.car_pos[ia])
         if local[0] <= C.BUMP_MIN_FORWARD_DIST:
             return
-        a.cooldown_until[b.car_id] = self.tick_count + int(round(C.BUMP_COOLDOWN_TIME * self.tick_rate))
-        if self.cs[ia, CS_IS_SUPERSONIC] and a.team != b.team and self.demos_enabled:
+        mutators = self._mutators[a.arena]
+        a.cooldown_until[b.car_id] = self.tick_count + int(round(mutators.bump_cooldown_s * self.tick_rate))
+        a.last_victim = b.car_id
+        if mutators.demo_mode == DemoMode.ON_CONTACT:
+            is_demo = True
+        elif mutators.demo_mode == DemoMode.DISABLED:
+            is_demo = False
+        else:
+            is_demo = bool(self.cs[ia, CS_IS_SUPERSONIC])
+        if is_demo and (a.team != b.team or mutators.team_demos):
             self.demolish(b.car_id)
-            self.events.append((self.tick_count, "demo", a.car_id, b.car_id))
+            self._events[a.arena].append(Demo(self.tick_count, a.arena, a.car_id, b.car_id))
             return
         on_ground = self.cs[ib, CS_ON_GROUND] > 0.5
         curve = _BUMP_GROUND if on_ground else _BUMP_AIR
         up = self.car_rot[ib][:, 2] if on_ground else np.array([0.0, 0.0, 1.0])
-        self.car_vel[ib] += direction * interp(curve, toward) + up * interp(_BUMP_UP, toward)
-        self.events.append((self.tick_count, "bump", a.car_id, b.car_id))
+        self.car_vel[ib] += direction * interp(curve, toward) + up * (interp(_BUMP_UP, toward)
+                                                                      * mutators.bump_force_scale)
+        self._events[a.arena].append(Bump(self.tick_count, a.arena, a.car_id, b.car_id))
 
     def demolish(self, car_id: int) -> None:
         s = self._slot(car_id)
         k = s.index
         self.cs[k, CS_IS_DEMOED] = 1.0
-        self.cs[k, CS_DEMO_TIMER] = C.DEMO_RESPAWN_TIME
+        self.cs[k, CS_DEMO_TIMER] = self._mutators[s.arena].respawn_delay_s
         cid = self.client
         # A demoed car leaves the world: no collisions, no gravity, until it respawns.
         pb.setCollisionFilterGroupMask(s.body, -1, 0, 0, physicsClientId=cid)
@@ -532,7 +588,7 @@ class ArenaBatch:
         keep = self.controls[k].copy()
         self.cs[k] = 0.0
         self.controls[k] = keep
-        self.cs[k, CS_BOOST] = C.BOOST_SPAWN_AMOUNT
+        self.cs[k, CS_BOOST] = self._mutators[s.arena].car_spawn_boost
         c, sn = math.cos(yaw), math.sin(yaw)
         rot = np.column_stack(([c, sn, 0.0], [-sn, c, 0.0], [0.0, 0.0, 1.0]))
         self.set_car(car_id, np.array([x, y, C.CAR_RESPAWN_Z]), rot, np.zeros(3), np.zeros(3))
@@ -582,8 +638,67 @@ class ArenaBatch:
             raise ValueError(f"box_id: no static box {box_id!r}; boxes are {sorted(self._static_boxes)}")
         return self._static_boxes[box_id]
 
-    def clear_events(self) -> None:
-        self.events.clear()
+    # ------------------------------------------------------------------ the public surface for game logic
+    def set_mutator_config(self, config: MutatorConfig, arena: int | None = None) -> None:
+        """Play arena ``arena`` (every arena if None) with ``config``. Gravity is PyBullet's one per world, so
+        it changes only for every arena at once."""
+        if not isinstance(config, MutatorConfig):
+            raise ValueError(f"config: expected MutatorConfig, got {type(config).__name__}")
+        targets = range(self.n_arenas) if arena is None else [self._arena_index(arena)]
+        if len(targets) < self.n_arenas and config.gravity_z_uu_s2 != self._mutators[0].gravity_z_uu_s2:
+            raise ValueError(f"gravity_z_uu_s2: the arenas of a batch share one gravity "
+                             f"({self._mutators[0].gravity_z_uu_s2:g}); change it with "
+                             f"ArenaBatch.set_mutator_config(config) for all arenas, got {config.gravity_z_uu_s2:g}")
+        self._read_state()
+        if config.gravity_z_uu_s2 != self._mutators[0].gravity_z_uu_s2:
+            pb.setGravity(0, 0, config.gravity_z_uu_s2 * M_PER_UU, physicsClientId=self.client)
+            self._ball_hold_vel = np.array([0.0, 0.0, -config.gravity_z_uu_s2 * self.dt])
+            self._ball_hold_vel_m = (self._ball_hold_vel * M_PER_UU).tolist()
+        for k in targets:
+            if config.ball_drag != self._mutators[k].ball_drag:
+                pb.changeDynamics(self._ball_bodies[k], -1, linearDamping=config.ball_drag,
+                                  physicsClientId=self.client)
+            self._mutators[k] = config
+            self.mutator_rows[k] = config.as_row()
+
+    def get_mutator_config(self, arena: int = 0) -> MutatorConfig:
+        return self._mutators[self._arena_index(arena)]
+
+    def _arena_index(self, arena: int) -> int:
+        if not isinstance(arena, (int, np.integer)) or not 0 <= arena < self.n_arenas:
+            raise ValueError(f"arena: must be an index in 0..{self.n_arenas - 1}, got {arena!r}")
+        return int(arena)
+
+    def drain_events(self, arena: int | None = None) -> list[PhysicsEvent]:
+        """The events of arena ``arena`` (every arena if None, arena by arena) since the last drain, in the order
+        the ticks produced them; they are removed."""
+        if arena is not None:
+            k = self._arena_index(arena)
+            events, self._events[k] = self._events[k], []
+            return events
+        events = [e for per_arena in self._events for e in per_arena]
+        self._events = [[] for _ in range(self.n_arenas)]
+        return events
+
+    def pybullet_bodies(self) -> tuple[list[int], list[int]]:
+        """(ball body ids by arena, car body ids by batch row) of the PyBullet world ``client``: for benchmarks
+        that step the bare world; the physics owns these bodies."""
+        return list(self._ball_bodies), list(self._car_bodies)
+
+    def clear_events(self, arena: int | None = None) -> None:
+        """Forget the undrained events of ``arena`` (every arena if None)."""
+        self.drain_events(arena)
+
+    def arrays(self) -> BatchArrays:
+        """Read-only views of every car and ball of the batch, current after the last tick or state change, for
+        code that handles all arenas at once (batched observations). Car rows are ``Car.batch_row``; they stay valid
+        until a car is added or removed."""
+        self._read_state()
+        cs = self.cs
+        return BatchArrays(*(_read_only(a) for a in (
+            self.car_pos, self.car_vel, self.car_ang_vel, self.car_rot, cs[:, CS_BOOST], cs[:, CS_ON_GROUND],
+            cs[:, CS_HAS_JUMPED], cs[:, CS_HAS_DOUBLE_JUMPED], cs[:, CS_HAS_FLIPPED], cs[:, CS_AIR_TIME_SINCE_JUMP],
+            cs[:, CS_IS_DEMOED], self.car_arena, self.ball_pos, self.ball_vel, self.ball_ang_vel, self.pad_timer)))
 
     def close(self) -> None:
         if self.client is not None and pb.isConnected(self.client):

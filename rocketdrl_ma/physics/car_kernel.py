@@ -14,6 +14,9 @@ from numba import njit
 
 from . import constants as C
 from .arena_geometry import arena_raycast
+from .mutators import (MUT_BOOST_ACCEL_AIR, MUT_BOOST_ACCEL_GROUND, MUT_BOOST_PADS, MUT_BOOST_USED_PER_SECOND,
+                       MUT_DODGE_DEADZONE, MUT_JUMP_ACCEL, MUT_JUMP_IMMEDIATE_VEL, MUT_PAD_COOLDOWN_BIG,
+                       MUT_PAD_COOLDOWN_SMALL, MUT_UNLIMITED_DOUBLE_JUMPS, MUT_UNLIMITED_FLIPS)
 
 # ---- columns of the car-state matrix
 CS_BOOST = 0
@@ -164,11 +167,12 @@ def _ray_sphere(origin, direction, center, radius):
 
 @njit(cache=True)
 def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
-                 wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, dt):
+                 wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut, dt):
     """Advance every active, non-demoed car's model by one tick: writes ``vel``/``ang_vel`` in place.
 
     ``pos``/``vel``/``ang_vel`` are (N, 3), ``rot`` is (N, 3, 3) with columns forward/right/up,
-    ``controls`` is (N, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake.
+    ``controls`` is (N, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake; ``mut`` holds each arena's
+    ``MutatorConfig.as_row()``.
     The order follows RocketSim's car update: wheel impulses are computed from the state at the start
     of the tick with last tick's steering and friction factors, then inputs act, then impulses apply.
 
@@ -209,6 +213,7 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         handbrake = controls[i, 7] > 0.5
         jump_pressed = jump and cs[i, CS_LAST_JUMP] < 0.5
         inv_i = inv_inertia[i]
+        m = mut[car_arena[i]]
 
         # ---- wheel rays against the arena (analytically) and this arena's ball
         bpos = ball_pos[car_arena[i]]
@@ -437,10 +442,10 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         elif on_ground and jump_pressed:
             cs[i, CS_IS_JUMPING] = 1.0
             cs[i, CS_JUMP_TIME] = 0.0
-            v += up * C.JUMP_IMMEDIATE_VEL
+            v += up * m[MUT_JUMP_IMMEDIATE_VEL]
         if cs[i, CS_IS_JUMPING] > 0.5:
             cs[i, CS_HAS_JUMPED] = 1.0
-            accel = C.JUMP_ACCEL
+            accel = m[MUT_JUMP_ACCEL]
             if cs[i, CS_JUMP_TIME] < C.JUMP_MIN_TIME:
                 accel *= C.JUMP_PRE_MIN_ACCEL_SCALE
             v += up * (accel * dt)
@@ -473,13 +478,14 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
                 cs[i, CS_AIR_TIME_SINCE_JUMP] += dt
             else:
                 cs[i, CS_AIR_TIME_SINCE_JUMP] = 0.0
-            if (jump_pressed and cs[i, CS_AIR_TIME_SINCE_JUMP] < C.DOUBLEJUMP_MAX_DELAY
-                    and cs[i, CS_HAS_DOUBLE_JUMPED] < 0.5 and cs[i, CS_HAS_FLIPPED] < 0.5
-                    and cs[i, CS_IS_AUTOFLIPPING] < 0.5):
-                if max(abs(yaw_in), abs(pitch_in), abs(roll_in)) >= C.DODGE_DEADZONE:
-                    _start_flip(i, cs, v, fwd, v_fwd, pitch_in, yaw_in, roll_in)
-                else:
-                    v += up * C.JUMP_IMMEDIATE_VEL
+            if jump_pressed and cs[i, CS_AIR_TIME_SINCE_JUMP] < C.DOUBLEJUMP_MAX_DELAY \
+                    and cs[i, CS_IS_AUTOFLIPPING] < 0.5:
+                unused = cs[i, CS_HAS_DOUBLE_JUMPED] < 0.5 and cs[i, CS_HAS_FLIPPED] < 0.5
+                if max(abs(yaw_in), abs(pitch_in), abs(roll_in)) >= m[MUT_DODGE_DEADZONE]:
+                    if unused or m[MUT_UNLIMITED_FLIPS] != 0.0:
+                        _start_flip(i, cs, v, fwd, v_fwd, pitch_in, yaw_in, roll_in)
+                elif unused or m[MUT_UNLIMITED_DOUBLE_JUMPS] != 0.0:
+                    v += up * C.JUMP_IMMEDIATE_VEL  # RocketSim's double jump ignores the mutator's jump impulse
                     cs[i, CS_HAS_DOUBLE_JUMPED] = 1.0
         if cs[i, CS_HAS_FLIPPED] > 0.5:
             cs[i, CS_FLIP_TIME] += dt
@@ -528,8 +534,8 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         cs[i, CS_BOOSTING_TIME] = t_boost
         boosting = cs[i, CS_BOOST] > 0.0 and t_boost > 0.0
         if boosting:
-            cs[i, CS_BOOST] = max(cs[i, CS_BOOST] - C.BOOST_USED_PER_SECOND * dt, 0.0)
-            v += fwd * ((C.BOOST_ACCEL_GROUND if on_ground else C.BOOST_ACCEL_AIR) * dt)
+            cs[i, CS_BOOST] = max(cs[i, CS_BOOST] - m[MUT_BOOST_USED_PER_SECOND] * dt, 0.0)
+            v += fwd * ((m[MUT_BOOST_ACCEL_GROUND] if on_ground else m[MUT_BOOST_ACCEL_AIR]) * dt)
         cs[i, CS_IS_BOOSTING] = 1.0 if boosting else 0.0
 
         cs[i, CS_LAST_JUMP] = 1.0 if jump else 0.0
@@ -612,21 +618,25 @@ def car_post_tick(vel, ang_vel, active, cs, dt):
 
 
 @njit(cache=True)
-def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_timer, picked, dt):
-    """Count pad cooldowns down and let cars pick up active pads; ``picked[i]`` gets the pad index or -1.
+def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_timer, picked, gained, mut, dt):
+    """Count pad cooldowns down and let cars pick up active pads, in the arenas with pads on (``mut``);
+    ``picked[i]`` gets the pad index or -1 and ``gained[i]`` the boost it added.
 
     Returns the number of pickups this tick.
     """
     n_picked = 0
     for a in range(pad_timer.shape[0]):
+        if mut[a, MUT_BOOST_PADS] == 0.0:
+            continue
         for k in range(pad_timer.shape[1]):
             if pad_timer[a, k] > 0.0:
                 pad_timer[a, k] = max(pad_timer[a, k] - dt, 0.0)
     for i in range(car_pos.shape[0]):
         picked[i] = -1
-        if not active[i] or cs[i, CS_IS_DEMOED] > 0.5 or cs[i, CS_BOOST] >= C.BOOST_MAX:
-            continue
         a = car_arena[i]
+        if (not active[i] or cs[i, CS_IS_DEMOED] > 0.5 or cs[i, CS_BOOST] >= C.BOOST_MAX
+                or mut[a, MUT_BOOST_PADS] == 0.0):
+            continue
         for k in range(pad_pos.shape[0]):
             if pad_timer[a, k] > 0.0:
                 continue
@@ -635,8 +645,10 @@ def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_time
             dy = car_pos[i, 1] - pad_pos[k, 1]
             if dx * dx + dy * dy < radius * radius and abs(car_pos[i, 2] - pad_pos[k, 2]) < C.BOOST_PAD_MAX_Z_DIFF:
                 amount = C.BOOST_PAD_BIG_AMOUNT if pad_is_big[k] else C.BOOST_PAD_SMALL_AMOUNT
-                cs[i, CS_BOOST] = min(cs[i, CS_BOOST] + amount, C.BOOST_MAX)
-                pad_timer[a, k] = C.BOOST_PAD_BIG_COOLDOWN if pad_is_big[k] else C.BOOST_PAD_SMALL_COOLDOWN
+                before = cs[i, CS_BOOST]
+                cs[i, CS_BOOST] = min(before + amount, C.BOOST_MAX)
+                gained[i] = cs[i, CS_BOOST] - before
+                pad_timer[a, k] = mut[a, MUT_PAD_COOLDOWN_BIG] if pad_is_big[k] else mut[a, MUT_PAD_COOLDOWN_SMALL]
                 picked[i] = k
                 n_picked += 1
                 break

@@ -8,7 +8,6 @@ import pytest
 
 from rocketdrl_ma.physics import Arena, ArenaBatch
 from rocketdrl_ma.physics.arena_geometry import arena_sdf
-from rocketdrl_ma.physics.car_kernel import CS_IS_DEMOED
 
 ROLLOUT = textwrap.dedent("""
     import hashlib, sys
@@ -67,7 +66,7 @@ def test_a_million_random_ticks_stay_finite_and_inside():
         batch.step(8)
         assert np.isfinite(batch.car_pos).all() and np.isfinite(batch.car_vel).all()
         assert np.isfinite(batch.ball_pos).all() and np.isfinite(batch.ball_vel).all()
-        live = batch.cs[:, CS_IS_DEMOED] < 0.5
+        live = batch.arrays().car_is_demoed == 0.0
         worst_car = min(worst_car, min(arena_sdf(*p)[0] for p in batch.car_pos[live]))
         worst_ball = min(worst_ball, min(arena_sdf(*p)[0] for p in batch.ball_pos))
     # Centres never leave the playable space. (The distance field is a lower bound near the goal posts, where
@@ -88,7 +87,7 @@ def test_an_arena_in_a_batch_behaves_like_a_lone_arena():
     rng = np.random.default_rng(0)
     for _ in range(60):
         controls = _random_controls(rng, 2)
-        lone._batch.controls[:] = controls
+        lone.batch.controls[:] = controls
         batch.controls[:] = np.tile(controls, (3, 1))
         lone.step(8)
         batch.step(8)
