@@ -299,7 +299,6 @@ class ArenaBatch:
         self.controls = np.zeros((n, 8))
         self.cs = np.zeros((n, CS_SIZE))
         self.car_arena = np.array([s.arena for s in self._slots], dtype=np.int64)
-        self.car_team = np.array([s.team for s in self._slots], dtype=np.int64)
         self.car_active = np.ones(n, dtype=np.bool_)
         self.pad_picked = np.full(n, -1, dtype=np.int64)
         self.pad_gained = np.zeros(n)
