@@ -319,20 +319,16 @@ def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, ray_len, i
         if not hit[k]:
             continue
         n = normal[k]
-        for j in range(3):
-            rel[j] = hard[k, j] + down[j] * dist[k] - p[j]
+        _contact_point_velocity(hard[k], down, dist[k], p, v0, w0, rel, cross, v_cp)
         rest = rest_len[k]
         susp_len = min(max(dist[k] - radius[k], rest - C.SUSPENSION_MAX_TRAVEL), rest + C.SUSPENSION_MAX_TRAVEL)
-        denom = _dot(n, down)
-        _set_cross(w0, rel, cross)
-        for j in range(3):
-            v_cp[j] = v0[j] + cross[j]
-        if denom >= 0.1 or denom > -1e-3:
+        n_up = -_dot(n, down)  # how squarely the surface faces the suspension
+        if n_up > 0.1:
+            clipped_inv = 1.0 / n_up
+            rel_vel = _dot(n, v_cp) * clipped_inv
+        else:  # a surface almost along the suspension: btVehicleRL's clip (RocketSim)
             rel_vel = 0.0
             clipped_inv = 10.0
-        else:
-            clipped_inv = -1.0 / denom
-            rel_vel = _dot(n, v_cp) * clipped_inv
         scale = C.SUSPENSION_FORCE_SCALE_FRONT if is_front[k] else C.SUSPENSION_FORCE_SCALE_BACK
         damping = C.SUSPENSION_DAMP_COMPRESSION if rel_vel < 0.0 else C.SUSPENSION_DAMP_RELAXATION
         force = (C.SUSPENSION_STIFFNESS * (rest - susp_len) * clipped_inv - damping * rel_vel) * scale
@@ -344,6 +340,16 @@ def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, ray_len, i
         amount = force * dt + push
         for j in range(3):
             susp_impulse[k, j] = n[j] * amount
+
+
+@njit(cache=True, inline="always")
+def _contact_point_velocity(hard_point, down, dist, p, v0, w0, rel, cross, v_cp):
+    """A wheel's contact point relative to the centre of mass (``rel``) and the start-of-tick velocity there."""
+    for j in range(3):
+        rel[j] = hard_point[j] + down[j] * dist - p[j]
+    _set_cross(w0, rel, cross)
+    for j in range(3):
+        v_cp[j] = v0[j] + cross[j]
 
 
 @njit(cache=True, inline="always")
@@ -361,8 +367,7 @@ def _friction_impulses(p, R, frame, v0, w0, inv_i, is_front, wheels, car, fric_i
         if not hit[k]:
             continue
         n = normal[k]
-        for j in range(3):
-            rel[j] = hard[k, j] + down[j] * dist[k] - p[j]
+        _contact_point_velocity(hard[k], down, dist[k], p, v0, w0, rel, cross, v_cp)
         along_up = _dot(rel, up)
         for j in range(3):  # applied in the centre-of-mass plane: no pitch from braking
             fric_rel[k, j] = rel[j] - up[j] * along_up
@@ -376,9 +381,6 @@ def _friction_impulses(p, R, frame, v0, w0, inv_i, is_front, wheels, car, fric_i
         for j in range(3):
             axle[j] /= a_len
         _set_cross(axle, n, f_dir)
-        _set_cross(w0, rel, cross)
-        for j in range(3):
-            v_cp[j] = v0[j] + cross[j]
         m_lat = 1.0 / _inv_mass_along(R, inv_i, rel, axle)
         side = -0.2 * _dot(v_cp, axle) * m_lat
         engine = car[CS_ENGINE]
