@@ -12,7 +12,7 @@ import numpy as np
 
 from . import constants as C
 from .arena_geometry import is_inside_arena
-from .batch import ArenaBatch, _box_vector
+from .world import PhysicsWorld, _box_vector
 from .car_config import CarConfig
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_AUTOFLIP_SCALE, CS_AUTOFLIP_TIMER, CS_BOOST, CS_BOOSTING_TIME,
                          CS_DEMO_TIMER, CS_FLIP_TIME, CS_FLIP_TORQUE_X, CS_FLIP_TORQUE_Y, CS_HANDBRAKE,
@@ -33,7 +33,7 @@ def _check_inside(name: str, pos: np.ndarray, margin: float) -> None:
 class Car:
     """A car in an arena. Its identity is stable; its state lives in the batch arrays."""
 
-    def __init__(self, batch: ArenaBatch, car_id: int, team: int, config: CarConfig):
+    def __init__(self, batch: PhysicsWorld, car_id: int, team: int, config: CarConfig):
         self._batch, self.id, self.team, self.config = batch, car_id, team, config
 
     @property
@@ -154,7 +154,7 @@ class Car:
 
 
 class Ball:
-    def __init__(self, batch: ArenaBatch, arena: int):
+    def __init__(self, batch: PhysicsWorld, arena: int):
         self._batch, self._arena = batch, arena
 
     def get_state(self) -> BallState:
@@ -196,7 +196,7 @@ class Ball:
 class BoostPad:
     """One of the 34 boost pads of an arena, in the order of RocketSim's ``Arena.get_boost_pads()``."""
 
-    def __init__(self, batch: ArenaBatch, arena: int, index: int):
+    def __init__(self, batch: PhysicsWorld, arena: int, index: int):
         self._batch, self._arena, self.index = batch, arena, index
         self.pos = C.BOOST_PAD_POSITIONS[index].copy()
         self.is_big = bool(C.BOOST_PAD_IS_BIG[index])
@@ -217,17 +217,17 @@ class Arena:
     """One soccar arena: ``Arena(tick_rate=120)``, ``add_car``, ``step``, ``reset_kickoff`` (uu, z up)."""
 
     def __init__(self, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
-        batch = ArenaBatch(1, tick_rate=tick_rate, seed=seed)
+        batch = PhysicsWorld(1, tick_rate=tick_rate, seed=seed)
         self._init_view(batch, 0)
-        batch.arenas[0] = self
+        batch.arenas.append(self)
 
     @classmethod
-    def _view(cls, batch: ArenaBatch, index: int) -> "Arena":
+    def _view(cls, batch: PhysicsWorld, index: int) -> "Arena":
         arena = cls.__new__(cls)
         arena._init_view(batch, index)
         return arena
 
-    def _init_view(self, batch: ArenaBatch, index: int) -> None:
+    def _init_view(self, batch: PhysicsWorld, index: int) -> None:
         self._batch = batch
         self.index = index
         self.ball = Ball(batch, index)
@@ -235,8 +235,9 @@ class Arena:
 
     # ---- RocketSim-style API
     @property
-    def batch(self) -> ArenaBatch:
-        """The batch this arena belongs to (a batch of one for a lone ``Arena``)."""
+    def batch(self) -> PhysicsWorld:
+        """The batch this arena belongs to: its ``ArenaBatch``, or for a lone ``Arena`` its own world of one (the
+        ``ArenaBatch`` machinery without other arenas)."""
         return self._batch
 
     @property
