@@ -107,15 +107,13 @@ class Car:
         b = self._batch
         cs = b.cs[self._k].tolist()
         slot = b._slot(self.id)
-        victim = slot.last_victim
-        cooldown = 0.0
-        if victim is not None:
-            cooldown = max(slot.cooldown_until.get(victim, 0) - b.tick_count, 0) * b.dt
+        victim = slot.contact_id
+        cooldown = max(slot.contact_until - b.tick_count, 0) * b.dt if victim is not None else 0.0
         return CarExtraState(
             holding_jump=cs[CS_LAST_JUMP] > 0.5, boost_active_time_s=cs[CS_BOOSTING_TIME],
             flip_torque=(cs[CS_FLIP_TORQUE_X], cs[CS_FLIP_TORQUE_Y], 0.0),
-            is_auto_flipping=cs[CS_IS_AUTOFLIPPING] > 0.5, auto_flip_timer_s=cs[CS_AUTOFLIP_TIMER], auto_flip_direction=cs[CS_AUTOFLIP_SCALE], car_contact_id=victim,
-            car_contact_cooldown_s=cooldown)
+            is_auto_flipping=cs[CS_IS_AUTOFLIPPING] > 0.5, auto_flip_timer_s=cs[CS_AUTOFLIP_TIMER],
+            auto_flip_direction=cs[CS_AUTOFLIP_SCALE], car_contact_id=victim, car_contact_cooldown_s=cooldown)
 
     def set_extra_state(self, extra: CarExtraState) -> None:
         """Restore what ``get_extra_state`` gave (after ``set_state``, which clears it)."""
@@ -134,10 +132,8 @@ class Car:
         cs[CS_IS_AUTOFLIPPING] = extra.is_auto_flipping
         cs[CS_AUTOFLIP_TIMER] = extra.auto_flip_timer_s
         cs[CS_AUTOFLIP_SCALE] = extra.auto_flip_direction
-        slot.last_victim = extra.car_contact_id
-        if extra.car_contact_id is not None:
-            slot.cooldown_until[extra.car_contact_id] = b.tick_count + int(round(extra.car_contact_cooldown_s
-                                                                                 * b.tick_rate))
+        slot.contact_id = extra.car_contact_id
+        slot.contact_until = b.tick_count + int(round(extra.car_contact_cooldown_s * b.tick_rate))
 
     def get_ball_hit_info(self) -> BallHitInfo | None:
         """This car's last touch of the ball, or None if it has not touched it."""

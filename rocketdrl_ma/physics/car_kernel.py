@@ -19,6 +19,7 @@ from .arena_geometry import arena_raycast
 from .mutators import (MUT_BOOST_ACCEL_AIR, MUT_BOOST_ACCEL_GROUND, MUT_BOOST_PADS, MUT_BOOST_USED_PER_SECOND,
                        MUT_DODGE_DEADZONE, MUT_JUMP_ACCEL, MUT_JUMP_IMMEDIATE_VEL, MUT_PAD_COOLDOWN_BIG,
                        MUT_PAD_COOLDOWN_SMALL, MUT_UNLIMITED_DOUBLE_JUMPS, MUT_UNLIMITED_FLIPS)
+from .vec import mat_t_vec, mat_vec, vcross, vcross_into, vdot
 
 # ---- columns of the car-state matrix
 CS_BOOST = 0
@@ -89,42 +90,8 @@ def interp(curve, x):
     return curve[curve.shape[0] - 1, 1]
 
 
-@njit(cache=True)
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(cache=True)
-def _mv(R, x):
-    """R @ x for a 3x3 matrix, without BLAS."""
-    return np.array([R[0, 0] * x[0] + R[0, 1] * x[1] + R[0, 2] * x[2],
-                     R[1, 0] * x[0] + R[1, 1] * x[1] + R[1, 2] * x[2],
-                     R[2, 0] * x[0] + R[2, 1] * x[1] + R[2, 2] * x[2]])
-
-
-@njit(cache=True)
-def _mtv(R, x):
-    """R.T @ x for a 3x3 matrix, without BLAS."""
-    return np.array([R[0, 0] * x[0] + R[1, 0] * x[1] + R[2, 0] * x[2],
-                     R[0, 1] * x[0] + R[1, 1] * x[1] + R[2, 1] * x[2],
-                     R[0, 2] * x[0] + R[1, 2] * x[1] + R[2, 2] * x[2]])
-
-
-@njit(cache=True)
-def _cross(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
-@njit(cache=True)
-def _set_cross(a, b, out):
-    """out = a x b (``_cross`` without a new array; ``out`` must not be ``a`` or ``b``)."""
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
-
-
 # The helpers below run several times per car and tick: they work on scalars (the arithmetic of
-# ``_mtv(R, _cross(...))`` and friends term by term) because a small array per step cost more than the maths.
+# ``mat_t_vec(R, vcross(...))`` and friends term by term) because a small array per step cost more than the maths.
 @njit(cache=True)
 def _inv_mass_along(R, inv_inertia, rel, direction):
     """1/m_eff of a unit impulse along ``direction`` applied at offset ``rel`` from the centre of mass."""
@@ -285,7 +252,7 @@ def _cast_wheel_rays(p, R, down, conn, ray_len, ball_pos, ball_radius, wheels, c
         if tb >= 0.0 and tb <= ray_len[k] and (not ok or tb < t):
             for j in range(3):
                 rel[j] = hp[j] + down[j] * tb - ball_pos[j]
-            norm = np.sqrt(_dot(rel, rel))
+            norm = np.sqrt(vdot(rel, rel))
             for j in range(3):
                 normal[k, j] = rel[j] / norm
             dist[k] = tb
@@ -322,10 +289,10 @@ def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, ray_len, i
         _contact_point_velocity(hard[k], down, dist[k], p, v0, w0, rel, cross, v_cp)
         rest = rest_len[k]
         susp_len = min(max(dist[k] - radius[k], rest - C.SUSPENSION_MAX_TRAVEL), rest + C.SUSPENSION_MAX_TRAVEL)
-        n_up = -_dot(n, down)  # how squarely the surface faces the suspension
+        n_up = -vdot(n, down)  # how squarely the surface faces the suspension
         if n_up > 0.1:
             clipped_inv = 1.0 / n_up
-            rel_vel = _dot(n, v_cp) * clipped_inv
+            rel_vel = vdot(n, v_cp) * clipped_inv
         else:  # a surface almost along the suspension: btVehicleRL's clip (RocketSim)
             rel_vel = 0.0
             clipped_inv = 10.0
@@ -336,7 +303,7 @@ def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, ray_len, i
             continue  # the suspension never pulls
         gap = dist[k] - (ray_len[k] - radius[k])
         m_eff = 1.0 / _inv_mass_along(R, inv_i, rel, n)
-        push = max(m_eff * (-0.2 * gap / dt - _dot(n, v_cp)), 0.0) * (1.0 / 1.5) / 4.0
+        push = max(m_eff * (-0.2 * gap / dt - vdot(n, v_cp)), 0.0) * (1.0 / 1.5) / 4.0
         amount = force * dt + push
         for j in range(3):
             susp_impulse[k, j] = n[j] * amount
@@ -347,7 +314,7 @@ def _contact_point_velocity(hard_point, down, dist, p, v0, w0, rel, cross, v_cp)
     """A wheel's contact point relative to the centre of mass (``rel``) and the start-of-tick velocity there."""
     for j in range(3):
         rel[j] = hard_point[j] + down[j] * dist - p[j]
-    _set_cross(w0, rel, cross)
+    vcross_into(w0, rel, cross)
     for j in range(3):
         v_cp[j] = v0[j] + cross[j]
 
@@ -368,27 +335,27 @@ def _friction_impulses(p, R, frame, v0, w0, inv_i, is_front, wheels, car, fric_i
             continue
         n = normal[k]
         _contact_point_velocity(hard[k], down, dist[k], p, v0, w0, rel, cross, v_cp)
-        along_up = _dot(rel, up)
+        along_up = vdot(rel, up)
         for j in range(3):  # applied in the centre-of-mass plane: no pitch from braking
             fric_rel[k, j] = rel[j] - up[j] * along_up
         _wheel_axle(is_front[k], fwd, right, cos_l, sin_l, axle)
-        along_n = _dot(axle, n)
+        along_n = vdot(axle, n)
         for j in range(3):
             axle[j] = axle[j] - n[j] * along_n
-        a_len = np.sqrt(_dot(axle, axle))
+        a_len = np.sqrt(vdot(axle, axle))
         if a_len < 1e-9:
             continue
         for j in range(3):
             axle[j] /= a_len
-        _set_cross(axle, n, f_dir)
+        vcross_into(axle, n, f_dir)
         m_lat = 1.0 / _inv_mass_along(R, inv_i, rel, axle)
-        side = -0.2 * _dot(v_cp, axle) * m_lat
+        side = -0.2 * vdot(v_cp, axle) * m_lat
         engine = car[CS_ENGINE]
         if engine != 0.0:
             rolling = engine
         elif car[CS_BRAKE] != 0.0:
             b = car[CS_BRAKE]
-            rolling = min(max(-_dot(v_cp, f_dir) * C.BRAKE_SLIP_SCALE, -b), b)
+            rolling = min(max(-vdot(v_cp, f_dir) * C.BRAKE_SLIP_SCALE, -b), b)
         else:
             rolling = 0.0
         long_amount = rolling * car[CS_LONG_FRICTION_0 + k]
@@ -419,7 +386,7 @@ def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_
     hb = hb + C.POWERSLIDE_RISE_RATE * dt if handbrake else hb - C.POWERSLIDE_FALL_RATE * dt
     hb = min(max(hb, 0.0), 1.0)
     car[CS_HANDBRAKE] = hb
-    v_fwd = _dot(v0, fwd)
+    v_fwd = vdot(v0, fwd)
     abs_v_fwd = abs(v_fwd)
     real_throttle = 1.0 if (c[6] > 0.5 and car[CS_BOOST] > 0.0) else throttle
     engine_throttle = real_throttle
@@ -449,16 +416,16 @@ def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_
             continue
         n = normal[k]
         _wheel_axle(is_front[k], fwd, right, cos_l, sin_l, axle)
-        _set_cross(axle, n, f_dir)  # the wheel's rolling direction
+        vcross_into(axle, n, f_dir)  # the wheel's rolling direction
         for j in range(3):
             rel[j] = hard[k, j] - p[j]
-        _set_cross(w0, rel, cross)
+        vcross_into(w0, rel, cross)
         for j in range(3):
             v_cp[j] = v0[j] + cross[j]  # the velocity at the wheel's hard point
-        lat_speed = abs(_dot(v_cp, axle))
+        lat_speed = abs(vdot(v_cp, axle))
         slip = 0.0
         if lat_speed > 5.0:
-            slip = lat_speed / (abs(_dot(v_cp, f_dir)) + lat_speed)
+            slip = lat_speed / (abs(vdot(v_cp, f_dir)) + lat_speed)
         lat_fric = interp(_LAT_CURVE_3W if three_wheel else _LAT_CURVE, slip)
         long_fric = 1.0
         if hb > 0.0:
@@ -487,7 +454,7 @@ def _mean_normal(wheels):
     for k in range(4):
         if hit[k]:
             n_avg += normal[k]
-    n_avg /= np.sqrt(_dot(n_avg, n_avg))
+    n_avg /= np.sqrt(vdot(n_avg, n_avg))
     return n_avg
 
 
@@ -496,7 +463,7 @@ def _update_air_torque(R, frame, c, car, v, w, dt):
     """RocketSim's ``_UpdateAirTorque`` with no wheel down: the flip's torque (and its cancel) or air control
     (pitch, yaw, roll with damping; pitch locked after a flip), and air throttle."""
     pitch_in, yaw_in, roll_in = c[2], c[3], c[4]
-    wl = _mtv(R, w)
+    wl = mat_t_vec(R, w)
     alpha = np.zeros(3)
     air_control = True
     flip_time = car[CS_FLIP_TIME]
@@ -519,7 +486,7 @@ def _update_air_torque(R, frame, c, car, v, w, dt):
         alpha[0] -= _AIR_TORQUE[2] * roll_in + _AIR_DAMPING[2] * wl[0]
         alpha[1] -= _AIR_TORQUE[0] * up_p + _AIR_DAMPING[0] * wl[1] * (1.0 - abs(up_p))
         alpha[2] += _AIR_TORQUE[1] * yaw_in - _AIR_DAMPING[1] * wl[2] * (1.0 - abs(yaw_in))
-    w += _mv(R, alpha) * dt
+    w += mat_vec(R, alpha) * dt
     v += frame.fwd * (C.THROTTLE_AIR_ACCEL * c[0] * dt)
 
 
@@ -606,12 +573,12 @@ def _update_auto_roll(frame, num_contact, wheels, car, v, w, dt):
         g_up = _mean_normal(wheels)
     else:
         g_up = car[CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3].copy()
-    cross_right = _cross(g_up, fwd)
-    cross_fwd = _cross(-g_up, cross_right)
-    right_factor = 1.0 - min(max(_dot(right, cross_right), 0.0), 1.0)
-    fwd_factor = 1.0 - min(max(_dot(fwd, cross_fwd), 0.0), 1.0)
-    torque_right = fwd * (-1.0 if _dot(right, g_up) >= 0.0 else 1.0) * right_factor
-    torque_fwd = right * (1.0 if _dot(fwd, g_up) >= 0.0 else -1.0) * fwd_factor
+    cross_right = vcross(g_up, fwd)
+    cross_fwd = vcross(-g_up, cross_right)
+    right_factor = 1.0 - min(max(vdot(right, cross_right), 0.0), 1.0)
+    fwd_factor = 1.0 - min(max(vdot(fwd, cross_fwd), 0.0), 1.0)
+    torque_right = fwd * (-1.0 if vdot(right, g_up) >= 0.0 else 1.0) * right_factor
+    torque_fwd = right * (1.0 if vdot(fwd, g_up) >= 0.0 else -1.0) * fwd_factor
     v -= g_up * (C.AUTOROLL_FORCE * dt)
     w += (torque_fwd + torque_right) * (C.AUTOROLL_TORQUE * dt)
 
@@ -679,7 +646,7 @@ def _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
         imp_x *= 1.0 + (C.FLIP_FORWARD_IMPULSE_MAX_SPEED_SCALE - 1.0) * speed_ratio
     imp_y *= 1.0 + (C.FLIP_SIDE_IMPULSE_MAX_SPEED_SCALE - 1.0) * speed_ratio
     fh = np.array([fwd[0], fwd[1], 0.0])
-    fh_len = np.sqrt(_dot(fh, fh))
+    fh_len = np.sqrt(vdot(fh, fh))
     if fh_len < 1e-9:
         return
     fh /= fh_len
@@ -702,11 +669,11 @@ def car_post_tick(vel, ang_vel, active, cs, dt):
             if cs[i, CS_DEMO_TIMER] <= 0.0:
                 respawn_due += 1
             continue
-        speed = np.sqrt(_dot(vel[i], vel[i]))
+        speed = np.sqrt(vdot(vel[i], vel[i]))
         if speed > C.CAR_MAX_SPEED:
             vel[i] *= C.CAR_MAX_SPEED / speed
             speed = C.CAR_MAX_SPEED
-        ang = np.sqrt(_dot(ang_vel[i], ang_vel[i]))
+        ang = np.sqrt(vdot(ang_vel[i], ang_vel[i]))
         if ang > C.CAR_MAX_ANG_SPEED:
             ang_vel[i] *= C.CAR_MAX_ANG_SPEED / ang
         if cs[i, CS_IS_SUPERSONIC] > 0.5 and cs[i, CS_SUPERSONIC_TIME] < C.SUPERSONIC_MAINTAIN_MAX_TIME:

@@ -98,6 +98,8 @@ class MutatorConfig:
         row[MUT_PAD_COOLDOWN_BIG] = self.boost_pad_cooldown_big_s
         row[MUT_PAD_COOLDOWN_SMALL] = self.boost_pad_cooldown_small_s
         row[MUT_BALL_MAX_SPEED] = self.ball_max_speed_uu_s
+        row[MUT_BALL_DRAG] = self.ball_drag
+        row[MUT_BALL_HIT_EXTRA_SCALE] = self.ball_hit_extra_force_scale
         return row
 
 
@@ -114,4 +116,6 @@ MUT_UNLIMITED_DOUBLE_JUMPS = 8
 MUT_PAD_COOLDOWN_BIG = 9
 MUT_PAD_COOLDOWN_SMALL = 10
 MUT_BALL_MAX_SPEED = 11
-MUT_SIZE = 12
+MUT_BALL_DRAG = 12
+MUT_BALL_HIT_EXTRA_SCALE = 13
+MUT_SIZE = 14

@@ -1,9 +1,12 @@
 """Many soccar arenas in one PyBullet world, stepped together: the machinery under ``Arena`` and ``ArenaBatch``.
 
 Each arena sits at its own origin on a grid far enough apart that nothing crosses over; the floor
-and ceiling planes are shared. Every per-tick quantity is held as arrays over all cars (or balls)
-of all arenas, so the car model runs as one compiled kernel and a lone ``Arena`` is simply a batch
-of one. Rocket League units (uu) everywhere outside this module's PyBullet calls, which use metres.
+and ceiling planes are shared. PyBullet holds the cars (their hitboxes against the arena, the
+minigames' boxes and each other); the balls live in arrays and move in ``ball_kernel``, which
+solves their contacts as RocketSim does. Every per-tick quantity is held as arrays over all cars
+and balls of all arenas, so the car and ball models run as compiled kernels and a lone ``Arena``
+is simply a batch of one. Rocket League units (uu) everywhere outside this module's PyBullet
+calls, which use metres.
 """
 from __future__ import annotations
 
@@ -16,74 +19,41 @@ from numba import njit
 
 from . import constants as C
 from .arena_geometry import arena_mesh
+from .ball_kernel import SPLIT_IMPULSE_ERP, ball_tick
 from .body_io import read_rows, unpack_rows
 from .car_config import CarConfig, get_preset
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER,
                          CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_SUPERSONIC,
                          CS_ON_GROUND, CS_SIZE, boost_pad_tick, car_post_tick, car_pre_tick, interp)
 from .events import BallTouch, BoostPickup, Bump, Demo, PhysicsEvent
-from .mutators import MUT_BALL_MAX_SPEED, DemoMode, MutatorConfig
+from .mutators import DemoMode, MutatorConfig
 from .state import BallHitInfo
 
 M_PER_UU = 1.0 / C.UU_PER_M
 ARENA_SPACING_UU = 20000.0  # arenas are ~8200 x 12000 uu; the gap keeps every body in its own arena
 ARENA_GRID_COLUMNS = 8
-# Bullet applies restitution to the approach speed before this tick's gravity; 0.575 gives the game's
-# measured floor bounce of 0.60 (RocketSim: v_out / v_in = 0.5998) at 120 Hz.
-BALL_RESTITUTION_BULLET = 0.575
-_BALL_HIT_CURVE = np.array(C.BALL_HIT_SCALE_CURVE)
+# Car materials: Bullet multiplies the two bodies' values, the arena's are 1.0, so a car's friction 0.3 and
+# restitution sqrt(0.1) give RocketSim's car-car 0.09 / 0.1 and car-world 0.3 / 0.32 (RocketSim: 0.3).
+CAR_FRICTION = math.sqrt(C.CAR_CAR_FRICTION)
+# RocketSim's cars meet only once their hitboxes overlap by 0.134 uu (bisected to 1e-6); PyBullet's meet at any
+# overlap. Each car's PyBullet box is half that smaller per face, so contacts start where RocketSim's do (the ball
+# meets the full box in ball_kernel).
+CAR_CONTACT_SHRINK = 0.134 / 2
+CAR_RESTITUTION = math.sqrt(C.CAR_CAR_RESTITUTION)
 _BUMP_GROUND = np.array(C.BUMP_VEL_CURVE_GROUND)
 _BUMP_AIR = np.array(C.BUMP_VEL_CURVE_AIR)
 _BUMP_UP = np.array(C.BUMP_UPWARD_VEL_CURVE)
 
 
 @njit(cache=True)
-def ball_post_tick(pos, vel, ang_vel, frozen, frozen_pos, dirty, mut):
-    """Hold frozen balls still and apply the speed and spin caps; ``dirty`` marks balls to write back.
-
-    Returns how many are dirty."""
-    n_dirty = 0
-    for k in range(vel.shape[0]):
-        dirty[k] = False
-        if frozen[k]:
-            pos[k] = frozen_pos[k]
-            vel[k] = 0.0
-            ang_vel[k] = 0.0
-            continue
-        speed = np.sqrt(vel[k, 0] ** 2 + vel[k, 1] ** 2 + vel[k, 2] ** 2)
-        max_speed = mut[k, MUT_BALL_MAX_SPEED]
-        if speed > max_speed:
-            vel[k] *= max_speed / speed
-            dirty[k] = True
-        spin = np.sqrt(ang_vel[k, 0] ** 2 + ang_vel[k, 1] ** 2 + ang_vel[k, 2] ** 2)
-        if spin > C.BALL_MAX_ANG_SPEED:
-            ang_vel[k] *= C.BALL_MAX_ANG_SPEED / spin
-            dirty[k] = True
-        n_dirty += dirty[k]
-    return n_dirty
-
-
-@njit(cache=True)
-def post_tick_kernels(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen_pos, ball_dirty, car_pos, car_vel,
-                      car_ang_vel, car_arena, car_active, cs, pad_timer, pad_picked, pad_gained, mut, dt):
-    """The compiled after-step work of one tick in one call: ``ball_post_tick``, ``car_post_tick`` and
-    ``boost_pad_tick``. Returns (balls to write back, cars due to respawn, pads picked up)."""
-    n_dirty = ball_post_tick(ball_pos, ball_vel, ball_ang_vel, ball_frozen, ball_frozen_pos, ball_dirty, mut)
-    respawn_due = 0
-    n_picked = 0
-    if car_pos.shape[0] > 0:
-        respawn_due = car_post_tick(car_vel, car_ang_vel, car_active, cs, dt)
-        n_picked = boost_pad_tick(car_pos, car_arena, car_active, cs, C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG,
-                                  pad_timer, pad_picked, pad_gained, mut, dt)
-    return n_dirty, respawn_due, n_picked
-
-
-@njit(cache=True)
-def hold_frozen_arrays(frozen, ball_pos, ball_vel, frozen_pos, hold_vel):
-    """Frozen balls ``frozen`` (indices) back at their place with the velocity that cancels a tick's gravity."""
-    for k in frozen:
-        ball_pos[k] = frozen_pos[k]
-        ball_vel[k] = hold_vel
+def post_tick_kernels(car_pos, car_vel, car_ang_vel, car_arena, car_active, cs, pad_timer, pad_picked, pad_gained,
+                      mut, dt):
+    """The compiled after-step work of one tick in one call: ``car_post_tick`` and ``boost_pad_tick``.
+    Returns (cars due to respawn, pads picked up)."""
+    respawn_due = car_post_tick(car_vel, car_ang_vel, car_active, cs, dt)
+    n_picked = boost_pad_tick(car_pos, car_arena, car_active, cs, C.BOOST_PAD_POSITIONS, C.BOOST_PAD_IS_BIG,
+                              pad_timer, pad_picked, pad_gained, mut, dt)
+    return respawn_due, n_picked
 
 
 def mat_to_quat(m: np.ndarray) -> tuple[float, float, float, float]:
@@ -145,10 +115,10 @@ class _CarSlot:
     def __init__(self, car_id: int, arena: int, team: int, config: CarConfig, body: int):
         self.car_id, self.arena, self.team, self.config, self.body = car_id, arena, team, config, body
         self.index = -1
-        self.last_ball_hit_tick = -10  # the last tick the extra hit impulse was applied
         self.ball_hit: BallHitInfo | None = None
-        self.cooldown_until: dict[int, int] = {}  # other car id -> tick when bumps may happen again
-        self.last_victim: int | None = None  # the car this one last bumped or demolished
+        # RocketSim's car contact: the car this one last bumped or demolished, and the tick from which it may again
+        self.contact_id: int | None = None
+        self.contact_until = 0
 
 
 class PhysicsWorld:
@@ -176,34 +146,31 @@ class PhysicsWorld:
         self.client = pb.connect(pb.DIRECT)
         cid = self.client
         pb.setGravity(0, 0, C.GRAVITY_Z * M_PER_UU, physicsClientId=cid)
+        # RocketSim's solver: 10 iterations, no restitution under 10 uu/s. (Its overlap correction, 0.8 a tick by
+        # split impulse, is not PyBullet's to set: contactERP 0.8 feeds a velocity bias here, which made cars leave
+        # walls faster than they came.)
         pb.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=0, numSolverIterations=10,
-                                     deterministicOverlappingPairs=1, physicsClientId=cid)
+                                     deterministicOverlappingPairs=1, restitutionVelocityThreshold=10.0 * M_PER_UU,
+                                     contactERP=0.0, physicsClientId=cid)
         self.origins = np.array([[(k % ARENA_GRID_COLUMNS) * ARENA_SPACING_UU,
                                   (k // ARENA_GRID_COLUMNS) * ARENA_SPACING_UU, 0.0] for k in range(n_arenas)])
         self._build_static_world()
-        self._static_boxes: dict[int, int] = {}  # PyBullet body id -> arena index
-        self._static_half_extents: dict[int, np.ndarray] = {}  # PyBullet body id -> half extents (uu)
-        self._ball_bodies = [self._make_ball(k) for k in range(n_arenas)]
+        self._static_boxes: dict[int, np.ndarray] = {}  # PyBullet body id -> (arena, centre xyz, half extents xyz) uu
+        self._box_rows = np.zeros((0, 7))  # the same, stacked for the ball kernel
         self.ball_pos = np.zeros((n_arenas, 3))
         self.ball_vel = np.zeros((n_arenas, 3))
         self.ball_ang_vel = np.zeros((n_arenas, 3))
         self.ball_frozen = np.zeros(n_arenas, dtype=bool)
-        self._ball_frozen_pos = np.zeros((n_arenas, 3))
-        self._ball_dirty = np.zeros(n_arenas, dtype=bool)
-        # What holding a frozen ball writes each tick, computed once when it is frozen (metres, PyBullet's frame).
-        self._ball_hold_vel = np.array([0.0, 0.0, -C.GRAVITY_Z * self.dt])
-        self._ball_hold_vel_m = (self._ball_hold_vel * M_PER_UU).tolist()
-        self._ball_hold_pos_m: list[list[float]] = [[0.0, 0.0, 0.0]] * n_arenas
-        self._read_plan: tuple[bytes, list[int], np.ndarray] | None = None  # see _read_plan_for
+        self._ball_pos_before = np.zeros((n_arenas, 3))  # where the balls were at the start of the last tick
         self.pad_timer = np.zeros((n_arenas, len(C.BOOST_PAD_POSITIONS)))
         self._slots: list[_CarSlot] = []
         self._slot_by_body: dict[int, _CarSlot] = {}
         self._slot_by_id: dict[int, _CarSlot] = {}
-        self._ball_arena = {b: k for k, b in enumerate(self._ball_bodies)}
         self._next_car_id = 0
         self._rebuild_car_arrays()
         self._state_fresh = False
         self._events: list[list[PhysicsEvent]] = [[] for _ in range(n_arenas)]  # per arena, since the last drain
+        self._overlap_push: dict[int, np.ndarray] = {}  # car row -> this tick's overlap correction (uu)
         self.arenas: list = []  # the Arena views, filled in by their maker
         for k in range(n_arenas):
             self.set_ball(k, np.array([0.0, 0.0, C.BALL_REST_Z]), np.zeros(3), np.zeros(3))
@@ -229,22 +196,12 @@ class PhysicsWorld:
             pb.changeDynamics(body, -1, lateralFriction=1.0, restitution=1.0, rollingFriction=0.0,
                               spinningFriction=0.0, physicsClientId=cid)
 
-    def _make_ball(self, arena: int) -> int:
-        cid = self.client
-        shape = pb.createCollisionShape(pb.GEOM_SPHERE, radius=C.BALL_RADIUS * M_PER_UU, physicsClientId=cid)
-        body = pb.createMultiBody(C.BALL_MASS, shape, basePosition=(self.origins[arena] * M_PER_UU).tolist(),
-                                  useMaximalCoordinates=True, physicsClientId=cid)
-        pb.changeDynamics(body, -1, lateralFriction=C.BALL_FRICTION, restitution=BALL_RESTITUTION_BULLET,
-                          linearDamping=C.BALL_DRAG, angularDamping=0.0, rollingFriction=0.0, spinningFriction=0.0,
-                          activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, physicsClientId=cid)
-        return body
-
     def add_car(self, arena: int, team: int, config: CarConfig | str) -> int:
         if team not in (0, 1):
             raise ValueError(f"team: must be 0 (blue) or 1 (orange), got {team!r}")
         cfg = get_preset(config) if isinstance(config, str) else config
         cid = self.client
-        half = [s * 0.5 * M_PER_UU for s in cfg.hitbox_size]
+        half = [(s * 0.5 - CAR_CONTACT_SHRINK) * M_PER_UU for s in cfg.hitbox_size]
         shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half,
                                         collisionFramePosition=[o * M_PER_UU for o in cfg.hitbox_offset],
                                         physicsClientId=cid)
@@ -266,9 +223,8 @@ class PhysicsWorld:
         return slot.car_id
 
     def _set_car_dynamics(self, body: int, cfg: CarConfig) -> None:
-        # Restitution 0 makes car-ball hits inelastic as in the game; Bullet can't set materials per pair.
         pb.changeDynamics(body, -1, mass=C.CAR_MASS, localInertiaDiagonal=cfg.inertia_diag.tolist(),
-                          lateralFriction=C.CAR_WORLD_FRICTION, restitution=0.0, linearDamping=0.0,
+                          lateralFriction=CAR_FRICTION, restitution=CAR_RESTITUTION, linearDamping=0.0,
                           angularDamping=0.0, rollingFriction=0.0, spinningFriction=0.0,
                           activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING, physicsClientId=self.client)
 
@@ -281,11 +237,12 @@ class PhysicsWorld:
         del self._slot_by_body[slot.body]
         del self._slot_by_id[car_id]
         for other in self._slots:
-            other.cooldown_until.pop(car_id, None)
+            if other.contact_id == car_id:
+                other.contact_id = None
         self._rebuild_car_arrays(old)
 
     def _snapshot_car_arrays(self) -> dict[int, tuple]:
-        return {s.car_id: (self.cs[s.index].copy(), self.controls[s.index].copy())
+        return {s.car_id: (self.cs[s.index].copy(), self.controls[s.index].copy(), self.last_extra_hit_tick[s.index])
                 for s in self._slots if s.index >= 0}
 
     def _rebuild_car_arrays(self, old: dict[int, tuple] | None = None) -> None:
@@ -301,6 +258,15 @@ class PhysicsWorld:
         self.car_active = np.ones(n, dtype=np.bool_)
         self.pad_picked = np.full(n, -1, dtype=np.int64)
         self.pad_gained = np.zeros(n)
+        self.last_extra_hit_tick = np.full(n, -10, dtype=np.int64)  # the last tick a car gave the extra push
+        self.hitbox_half = np.array([np.array(s.config.hitbox_size) * 0.5 for s in self._slots]).reshape(n, 3)
+        self.hitbox_offset = np.array([s.config.hitbox_offset for s in self._slots], dtype=np.float64).reshape(n, 3)
+        # What the ball kernel reports per car each tick
+        self._touched = np.zeros(n, dtype=np.bool_)
+        self._touch_point = np.zeros((n, 3))
+        self._touch_normal = np.zeros((n, 3))
+        self._extra_vel = np.zeros((n, 3))
+        self._car_push = np.zeros((n, 3))
         wheels = [s.config.wheel_table() for s in self._slots]
         self.wheel_conn = np.array([w["connection"] for w in wheels]).reshape(n, 4, 3)
         self.wheel_rest = np.array([w["rest_length"] for w in wheels]).reshape(n, 4)
@@ -310,11 +276,11 @@ class PhysicsWorld:
         self.inv_inertia = np.array([1.0 / (s.config.inertia_diag * C.UU_PER_M**2) for s in self._slots]).reshape(n, 3)
         self.three_wheel = np.array([s.config.three_wheel for s in self._slots], dtype=np.bool_)
         self._car_bodies = [s.body for s in self._slots]
-        self._read_plan = None
+        self._car_rows = np.arange(n, dtype=np.int64)
         for k, s in enumerate(self._slots):
             s.index = k
             if old and s.car_id in old:
-                self.cs[k], self.controls[k] = old[s.car_id]
+                self.cs[k], self.controls[k], self.last_extra_hit_tick[k] = old[s.car_id]
         self._state_fresh = False
 
     def _slot(self, car_id: int) -> _CarSlot:
@@ -325,29 +291,15 @@ class PhysicsWorld:
 
     # ------------------------------------------------------------------ state I/O (uu <-> metres)
     def _read_state(self) -> None:
-        """Refresh every ball and car from PyBullet (no-op while the arrays are current)."""
+        """Refresh every car from PyBullet (no-op while the arrays are current); the balls are the arrays."""
         if self._state_fresh:
             return
-        self._read_bodies(self._ball_bodies + self._car_bodies,
-                          np.arange(self.n_arenas + len(self._car_bodies), dtype=np.int64))
+        self._read_cars()
         self._state_fresh = True
 
-    def _read_bodies(self, bodies: list[int], targets: np.ndarray) -> None:
-        """Read ``bodies`` into the arrays: target ``t < n_arenas`` is ball ``t``, else car ``t - n_arenas``."""
-        unpack_rows(read_rows(bodies, self.client), targets, self.n_arenas, self.origins, self.car_arena,
-                    self.ball_pos, self.ball_vel, self.ball_ang_vel, self.car_pos, self.car_quat, self.car_rot,
-                    self.car_vel, self.car_ang_vel)
-
-    def _read_plan_for(self, frozen: np.ndarray) -> tuple[list[int], np.ndarray]:
-        """The bodies a tick reads after its step: every car, and the balls not frozen (``ball_post_tick`` puts
-        a frozen ball back in place anyway). Kept until the frozen set or the cars change."""
-        key = frozen.tobytes()
-        if self._read_plan is None or self._read_plan[0] != key:
-            balls = np.flatnonzero(~frozen).tolist()
-            targets = np.array(balls + list(range(self.n_arenas, self.n_arenas + len(self._car_bodies))),
-                               dtype=np.int64)
-            self._read_plan = (key, [self._ball_bodies[k] for k in balls] + self._car_bodies, targets)
-        return self._read_plan[1], self._read_plan[2]
+    def _read_cars(self) -> None:
+        unpack_rows(read_rows(self._car_bodies, self.client), self._car_rows, self.origins, self.car_arena,
+                    self.car_pos, self.car_quat, self.car_rot, self.car_vel, self.car_ang_vel)
 
     def _write_car_velocities(self, all_writable: bool) -> None:
         """Every active, non-demolished car's velocities to PyBullet (``all_writable``: that is every car)."""
@@ -364,34 +316,10 @@ class PhysicsWorld:
             if ok:
                 reset_velocity(body, v, w, cid)
 
-    def _write_ball(self, k: int, position: bool = False) -> None:
-        cid = self.client
-        body = self._ball_bodies[k]
-        if position:
-            pb.resetBasePositionAndOrientation(body, ((self.ball_pos[k] + self.origins[k]) * M_PER_UU).tolist(),
-                                               (0, 0, 0, 1), physicsClientId=cid)
-        pb.resetBaseVelocity(body, (self.ball_vel[k] * M_PER_UU).tolist(), self.ball_ang_vel[k].tolist(),
-                             physicsClientId=cid)
-
-    def _hold_frozen_balls(self, frozen: np.ndarray) -> None:
-        """Put every frozen ball back in place with a velocity that cancels this tick's gravity, so it stays
-        exactly where it is (the arithmetic of ``_write_ball``, done once when the ball was frozen)."""
-        cid = self.client
-        reset_pose, reset_velocity = pb.resetBasePositionAndOrientation, pb.resetBaseVelocity
-        hold_frozen_arrays(frozen, self.ball_pos, self.ball_vel, self._ball_frozen_pos, self._ball_hold_vel)
-        for k in frozen.tolist():
-            body = self._ball_bodies[k]
-            reset_pose(body, self._ball_hold_pos_m[k], (0, 0, 0, 1), cid)
-            reset_velocity(body, self._ball_hold_vel_m, self.ball_ang_vel[k].tolist(), cid)
-
     def set_ball(self, arena: int, pos: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
-        self._read_state()
         self.ball_pos[arena], self.ball_vel[arena], self.ball_ang_vel[arena] = pos, vel, ang_vel
         # Like the game, a ball placed at rest hangs where it is until something touches it.
         self.ball_frozen[arena] = not (np.any(vel) or np.any(ang_vel))
-        self._ball_frozen_pos[arena] = pos
-        self._ball_hold_pos_m[arena] = ((self._ball_frozen_pos[arena] + self.origins[arena]) * M_PER_UU).tolist()
-        self._write_ball(arena, position=True)
 
     def set_car(self, car_id: int, pos: np.ndarray, rot: np.ndarray, vel: np.ndarray, ang_vel: np.ndarray) -> None:
         self._read_state()
@@ -417,32 +345,66 @@ class PhysicsWorld:
                                           self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
                                           self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs,
                                           self.mutator_rows, self.dt)
+            # The balls' whole tick: contacts from the positions at the start of the tick, as in RocketSim.
+            self._ball_pos_before[:] = self.ball_pos
+            n_touch = ball_tick(self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self.car_pos,
+                                self.car_rot, self.car_vel, self.car_ang_vel, self.car_arena,
+                                self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0), self.hitbox_half,
+                                self.hitbox_offset, self.inv_inertia, self.last_extra_hit_tick, self._box_rows,
+                                self.mutator_rows, self._mutators[0].gravity_z_uu_s2, self.tick_count + 1, self.dt,
+                                self._touched, self._touch_point, self._touch_normal, self._extra_vel, self._car_push)
+            if self._slots:
+                if n_touch:
+                    self._push_cars()  # before the velocities: PyBullet's pose reset clears them
                 self._write_car_velocities(unwritable == 0)
-            frozen = self.ball_frozen.nonzero()[0]
-            if len(frozen):
-                self._hold_frozen_balls(frozen)
             step_simulation(cid)
             self.tick_count += 1
-            touches, car_pairs = self._classify_contacts(pb.getContactPoints(physicsClientId=cid))
-            if touches or car_pairs:
-                # RocketSim scores a car's touch from the velocities at contact, before the solver resolves it:
-                # the arrays still hold them until the read below.
-                self._pre_step = (self.car_pos.copy(), self.car_vel.copy(), self.ball_pos.copy(),
-                                  self.ball_vel.copy())
-            self._read_bodies(*self._read_plan_for(self.ball_frozen))
+            car_pairs = self._classify_contacts(pb.getContactPoints(physicsClientId=cid))
+            if car_pairs:
+                # RocketSim judges a car-car contact from the cars as they were when it was found, before the
+                # solver: the arrays still hold that state until the read below.
+                self._pre_step = (self.car_pos.copy(), self.car_vel.copy(), self.car_rot.copy())
+            if self._slots:
+                self._read_cars()
+                if self._overlap_push:
+                    self._push_overlapping_cars()
             self._state_fresh = True
-            if touches or car_pairs:
-                self._hits(touches, car_pairs)
-            self._post_tick()
+            if n_touch:
+                self._record_touches()
+            if car_pairs:
+                self._car_hits(car_pairs)
+            if self._slots:
+                self._post_tick()
+
+    def _push_cars(self) -> None:
+        """Move the cars whose overlap with the ball is being pushed apart (positions only, like Bullet's split
+        impulse)."""
+        cid = self.client
+        for k in np.flatnonzero(np.any(self._car_push != 0.0, axis=1)).tolist():
+            self.car_pos[k] += self._car_push[k]
+            slot = self._slots[k]
+            pb.resetBasePositionAndOrientation(slot.body, ((self.car_pos[k] + self.origins[slot.arena])
+                                                           * M_PER_UU).tolist(), self.car_quat[k].tolist(), cid)
+
+    def _record_touches(self) -> None:
+        """The touch events and hit info of the cars the ball kernel found touching a ball this tick."""
+        tick = self.tick_count
+        for i in np.flatnonzero(self._touched).tolist():
+            slot = self._slots[i]
+            k = slot.arena
+            point, ball_pos = self._touch_point[i], self._ball_pos_before[k]
+            extra = int(self.last_extra_hit_tick[i])
+            slot.ball_hit = BallHitInfo(tick=tick, extra_impulse_tick=extra,
+                                        relative_pos_on_ball=tuple((point - ball_pos).tolist()),
+                                        ball_pos=tuple(ball_pos.tolist()),
+                                        extra_hit_vel=tuple(self._extra_vel[i].tolist()))
+            self._events[k].append(BallTouch(tick, k, slot.car_id, tuple(point.tolist()),
+                                             tuple(self._touch_normal[i].tolist()), extra == tick))
 
     def _post_tick(self) -> None:
-        n_dirty, respawn_due, picked = post_tick_kernels(
-            self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self._ball_frozen_pos, self._ball_dirty,
+        respawn_due, picked = post_tick_kernels(
             self.car_pos, self.car_vel, self.car_ang_vel, self.car_arena, self.car_active, self.cs,
             self.pad_timer, self.pad_picked, self.pad_gained, self.mutator_rows, self.dt)
-        if n_dirty:
-            for k in self._ball_dirty.nonzero()[0].tolist():
-                self._write_ball(k)
         if picked:
             for k in np.flatnonzero(self.pad_picked >= 0).tolist():
                 slot = self._slots[k]
@@ -453,97 +415,99 @@ class PhysicsWorld:
                 if self.cs[k, CS_DEMO_TIMER] <= 0.0:
                     self.respawn(self._slots[k].car_id)
 
-    def _classify_contacts(self, contacts: tuple) -> tuple[dict[tuple[int, int], tuple], dict[tuple[int, int], tuple]]:
-        """This tick's contact points as ball touches {(car body, arena): (point on the ball, normal, its sign)}
-        and car-car hits {(body a, body b): contact points}, each with its first contact point; a hitbox touching
-        the arena is recorded for auto-flip and auto-roll here."""
-        touches: dict[tuple[int, int], tuple] = {}
-        car_pairs: dict[tuple[int, int], tuple] = {}
+    def _classify_contacts(self, contacts: tuple) -> dict[tuple[int, int], list]:
+        """This tick's car-car contacts {(body a, body b): [(point on a, point on b), ...]} in PyBullet's order; a
+        hitbox touching the arena is recorded for auto-flip and auto-roll here."""
+        car_pairs: dict[tuple[int, int], list] = {}
+        self._overlap_push.clear()
         if not contacts:
-            return touches, car_pairs
-        ball_arena, slot_by_body = self._ball_arena, self._slot_by_body
+            return car_pairs
+        slot_by_body = self._slot_by_body
         for c in contacts:
             a, b = c[1], c[2]
-            if a in ball_arena or b in ball_arena:
-                # PyBullet's normal points from body b to body a.
-                ball, other, point, sign = (a, b, c[5], 1.0) if a in ball_arena else (b, a, c[6], -1.0)
-                if other in slot_by_body:
-                    touches.setdefault((other, ball_arena[ball]), (point, c[7], sign))
-            elif a in slot_by_body and b in slot_by_body:
-                car_pairs.setdefault((a, b), (c[5], c[6]))
+            if a in slot_by_body and b in slot_by_body:
+                car_pairs.setdefault((a, b), []).append((c[5], c[6]))
+                self._push_apart(slot_by_body[a].index, c[7], c[8], 0.5)
+                self._push_apart(slot_by_body[b].index, np.negative(c[7]), c[8], 0.5)
             elif a in self._static_set or b in self._static_set:
                 # The hitbox touching the arena drives auto-flip and auto-roll next tick.
                 car, sign = (a, 1.0) if a in slot_by_body else (b, -1.0)
                 slot = slot_by_body.get(car)
                 if slot is not None:
+                    normal = np.multiply(c[7], sign)
                     self.cs[slot.index, CS_BODY_CONTACT] = 1.0
-                    self.cs[slot.index, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3] = np.multiply(c[7], sign)
-        return touches, car_pairs
+                    self.cs[slot.index, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3] = normal
+                    self._push_apart(slot.index, normal, c[8], 1.0)
+        return car_pairs
 
-    def _hits(self, touches: dict[tuple[int, int], tuple], car_pairs: dict[tuple[int, int], tuple]) -> None:
-        """Ball hits and car-car bumps or demolitions of this tick's contacts, after the bodies were read."""
+    def _push_apart(self, k: int, normal, distance_m: float, share: float) -> None:
+        """Bullet's split impulse for car ``k`` at one contact point (normal towards the car): its ``share`` of 0.8
+        of the overlap, as a position change; several points along one normal push once, not once each."""
+        depth = -distance_m * C.UU_PER_M
+        if depth <= 0.0:
+            return
+        n = np.asarray(normal, dtype=np.float64)
+        push = self._overlap_push.get(k)
+        if push is None:
+            push = self._overlap_push[k] = np.zeros(3)
+        need = SPLIT_IMPULSE_ERP * depth * share - float(push @ n)
+        if need > 0.0:
+            push += n * need
+
+    def _push_overlapping_cars(self) -> None:
+        """Apply this tick's overlap pushes (after the cars were read; the next tick writes their velocities)."""
+        cid = self.client
+        for k, push in self._overlap_push.items():
+            slot = self._slots[k]
+            if self.cs[k, CS_IS_DEMOED]:
+                continue
+            self.car_pos[k] += push
+            pb.resetBasePositionAndOrientation(slot.body, ((self.car_pos[k] + self.origins[slot.arena])
+                                                           * M_PER_UU).tolist(), self.car_quat[k].tolist(), cid)
+
+    def _car_hits(self, car_pairs: dict[tuple[int, int], list]) -> None:
+        """Bumps and demolitions of this tick's car-car contacts, after the cars were read. As RocketSim's contact
+        callback: every contact point of a pair, each tested both ways, the later-added car as the attacker
+        first."""
         slot_by_body = self._slot_by_body
-        for (body, k), (point_m, normal, sign) in sorted(touches.items()):
-            if self.ball_frozen[k]:  # the tick's read skipped it: its state after the step is needed now
-                self.ball_frozen[k] = False
-                self._read_bodies([self._ball_bodies[k]], np.array([k], dtype=np.int64))
-            point = np.array(point_m) * C.UU_PER_M - self.origins[k]
-            self._ball_hit(slot_by_body[body], k, point, np.multiply(normal, sign))
-        for (a, b), (pos_on_a, pos_on_b) in sorted(car_pairs.items()):
+        pairs = []
+        for (a, b), points in car_pairs.items():
             sa, sb = slot_by_body[a], slot_by_body[b]
-            self._car_hit(sa, sb, np.array(pos_on_a) * C.UU_PER_M - self.origins[sa.arena])
-            self._car_hit(sb, sa, np.array(pos_on_b) * C.UU_PER_M - self.origins[sb.arena])
+            if sa.car_id < sb.car_id:
+                sa, sb, points = sb, sa, [(on_b, on_a) for on_a, on_b in points]
+            pairs.append((sa.car_id, sb.car_id, sa, sb, points))
+        for _, _, sa, sb, points in sorted(pairs, key=lambda p: p[:2]):
+            origin = self.origins[sa.arena]
+            for pos_on_a, pos_on_b in points:
+                if not self._car_hit(sa, sb, np.array(pos_on_a) * C.UU_PER_M - origin):
+                    break  # a car of the pair is demolished
+                if not self._car_hit(sb, sa, np.array(pos_on_b) * C.UU_PER_M - origin):
+                    break
 
-    def _ball_hit(self, slot: _CarSlot, arena: int, point: np.ndarray, normal: np.ndarray) -> None:
-        """Record a car's touch and give Rocket League's extra push, at most once every other tick per car."""
-        k = slot.index
-        car_pos, car_vel, ball_pos, ball_vel = self._pre_step
-        added = np.zeros(3)
-        extra = self.tick_count > slot.last_ball_hit_tick + C.BALL_HIT_MIN_TICK_GAP - 1
-        if extra:
-            slot.last_ball_hit_tick = self.tick_count
-            rel_pos = ball_pos[arena] - car_pos[k]
-            rel_vel = ball_vel[arena] - car_vel[k]
-            rel_speed = min(float(np.linalg.norm(rel_vel)), C.BALL_HIT_MAX_REL_SPEED)
-            if rel_speed > 0.0:
-                hit_dir = np.array([rel_pos[0], rel_pos[1], rel_pos[2] * C.BALL_HIT_Z_SCALE])
-                hit_dir /= np.linalg.norm(hit_dir)
-                fwd = self.car_rot[k][:, 0]
-                hit_dir -= fwd * ((1.0 - C.BALL_HIT_FORWARD_SCALE) * (hit_dir @ fwd))
-                hit_dir /= np.linalg.norm(hit_dir)
-                added = hit_dir * rel_speed * interp(_BALL_HIT_CURVE, rel_speed) \
-                    * self._mutators[arena].ball_hit_extra_force_scale
-                self.ball_vel[arena] += added
-                self._write_ball(arena)
-        slot.ball_hit = BallHitInfo(tick=self.tick_count, extra_impulse_tick=slot.last_ball_hit_tick,
-                                    relative_pos_on_ball=tuple((point - ball_pos[arena]).tolist()),
-                                    ball_pos=tuple(ball_pos[arena].tolist()), extra_hit_vel=tuple(added.tolist()))
-        self._events[arena].append(BallTouch(self.tick_count, arena, slot.car_id, tuple(point.tolist()),
-                                             tuple(normal.tolist()), extra))
-
-    def _car_hit(self, a: _CarSlot, b: _CarSlot, contact_uu: np.ndarray) -> None:
-        """Car ``a`` bumping or demolishing car ``b`` (RocketSim's car-car rules)."""
+    def _car_hit(self, a: _CarSlot, b: _CarSlot, contact_uu: np.ndarray) -> bool:
+        """Car ``a`` bumping or demolishing car ``b`` at the contact point ``contact_uu`` on ``a`` (RocketSim's
+        car-car rules, judged from the cars as they were when the contact was found). False if either car is
+        demolished (nothing more happens between them this tick)."""
         ia, ib = a.index, b.index
         if self.cs[ia, CS_IS_DEMOED] or self.cs[ib, CS_IS_DEMOED]:
-            return
-        if a.cooldown_until.get(b.car_id, -1) > self.tick_count:
-            return
-        car_pos, car_vel, _, _ = self._pre_step  # the velocities at contact, as RocketSim's callback sees them
+            return False
+        if a.contact_id == b.car_id and a.contact_until > self.tick_count:
+            return True
+        car_pos, car_vel, car_rot = self._pre_step
         vel_a = car_vel[ia]
-        speed_a = float(np.linalg.norm(vel_a))
         delta = car_pos[ib] - car_pos[ia]
-        if speed_a <= 0.0 or vel_a @ delta <= 0.0:
-            return
-        direction = vel_a / speed_a
+        if vel_a @ delta <= 0.0:
+            return True  # not going towards the other car
+        direction = vel_a / np.linalg.norm(vel_a)
         toward = float(vel_a @ (delta / np.linalg.norm(delta)))
-        if speed_a <= float(car_vel[ib] @ direction):
-            return
-        local = self.car_rot[ia].T @ (contact_uu - self.car_pos[ia])
+        if toward <= float(car_vel[ib] @ direction):
+            return True  # not faster towards it than it goes away
+        local = car_rot[ia].T @ (contact_uu - car_pos[ia])
         if local[0] <= C.BUMP_MIN_FORWARD_DIST:
-            return
+            return True  # not the front bumper
         mutators = self._mutators[a.arena]
-        a.cooldown_until[b.car_id] = self.tick_count + int(round(mutators.bump_cooldown_s * self.tick_rate))
-        a.last_victim = b.car_id
+        a.contact_id = b.car_id
+        a.contact_until = self.tick_count + int(round(mutators.bump_cooldown_s * self.tick_rate))
         if mutators.demo_mode == DemoMode.ON_CONTACT:
             is_demo = True
         elif mutators.demo_mode == DemoMode.DISABLED:
@@ -553,13 +517,15 @@ class PhysicsWorld:
         if is_demo and (a.team != b.team or mutators.team_demos):
             self.demolish(b.car_id)
             self._events[a.arena].append(Demo(self.tick_count, a.arena, a.car_id, b.car_id))
-            return
+            return False
         on_ground = self.cs[ib, CS_ON_GROUND] > 0.5
         curve = _BUMP_GROUND if on_ground else _BUMP_AIR
-        up = self.car_rot[ib][:, 2] if on_ground else np.array([0.0, 0.0, 1.0])
+        up = car_rot[ib][:, 2] if on_ground else np.array([0.0, 0.0, 1.0])
+        # RocketSim adds the bump after the tick's integration (its velocity cache): the read state is after it.
         self.car_vel[ib] += direction * interp(curve, toward) + up * (interp(_BUMP_UP, toward)
                                                                       * mutators.bump_force_scale)
         self._events[a.arena].append(Bump(self.tick_count, a.arena, a.car_id, b.car_id))
+        return True
 
     def demolish(self, car_id: int) -> None:
         s = self._slot(car_id)
@@ -595,7 +561,8 @@ class PhysicsWorld:
     def add_static_box(self, arena: int, center_uu: np.ndarray, half_extents_uu: np.ndarray) -> int:
         """An immovable axis-aligned box in ``arena`` that cars and the ball collide with; returns its id.
 
-        It has the arena's materials (friction and restitution 1.0, so each body's own value applies).
+        Cars meet it in PyBullet with the arena's materials (friction and restitution 1.0, so each car's own value
+        applies); the ball meets it as part of the arena (``ball_kernel``).
         """
         if not isinstance(arena, (int, np.integer)) or not 0 <= arena < self.n_arenas:
             raise ValueError(f"arena: must be an index in 0..{self.n_arenas - 1}, got {arena!r}")
@@ -610,13 +577,16 @@ class PhysicsWorld:
         pb.changeDynamics(body, -1, lateralFriction=1.0, restitution=1.0, rollingFriction=0.0,
                           spinningFriction=0.0, physicsClientId=cid)
         self._static_set.add(body)  # cars touching it count as touching the arena (auto-flip, auto-roll)
-        self._static_boxes[body] = int(arena)
-        self._static_half_extents[body] = half
+        self._static_boxes[body] = np.concatenate(([arena], center, half))
+        self._stack_boxes()
         return body
+
+    def _stack_boxes(self) -> None:
+        self._box_rows = np.array(list(self._static_boxes.values()), dtype=np.float64).reshape(-1, 7)
 
     def static_box_half_extents(self, box_id: int) -> np.ndarray:
         self._static_box_arena(box_id)
-        return self._static_half_extents[box_id].copy()
+        return self._static_boxes[box_id][4:7].copy()
 
     def move_static_box(self, box_id: int, center_uu: np.ndarray) -> None:
         """Put a static box's centre at ``center_uu`` (between rounds; it does not sweep through bodies)."""
@@ -624,17 +594,20 @@ class PhysicsWorld:
         center = _box_vector("center_uu", center_uu)
         pb.resetBasePositionAndOrientation(box_id, ((center + self.origins[arena]) * M_PER_UU).tolist(),
                                            (0, 0, 0, 1), physicsClientId=self.client)
+        self._static_boxes[box_id][1:4] = center
+        self._stack_boxes()
 
     def remove_static_box(self, box_id: int) -> None:
         self._static_box_arena(box_id)
         pb.removeBody(box_id, physicsClientId=self.client)
         self._static_set.discard(box_id)
-        del self._static_boxes[box_id], self._static_half_extents[box_id]
+        del self._static_boxes[box_id]
+        self._stack_boxes()
 
     def _static_box_arena(self, box_id: int) -> int:
         if box_id not in self._static_boxes:
             raise ValueError(f"box_id: no static box {box_id!r}; boxes are {sorted(self._static_boxes)}")
-        return self._static_boxes[box_id]
+        return int(self._static_boxes[box_id][0])
 
     # ------------------------------------------------------------------ the public surface for game logic
     def set_mutator_config(self, config: MutatorConfig, arena: int | None = None) -> None:
@@ -650,12 +623,7 @@ class PhysicsWorld:
         self._read_state()
         if config.gravity_z_uu_s2 != self._mutators[0].gravity_z_uu_s2:
             pb.setGravity(0, 0, config.gravity_z_uu_s2 * M_PER_UU, physicsClientId=self.client)
-            self._ball_hold_vel = np.array([0.0, 0.0, -config.gravity_z_uu_s2 * self.dt])
-            self._ball_hold_vel_m = (self._ball_hold_vel * M_PER_UU).tolist()
         for k in targets:
-            if config.ball_drag != self._mutators[k].ball_drag:
-                pb.changeDynamics(self._ball_bodies[k], -1, linearDamping=config.ball_drag,
-                                  physicsClientId=self.client)
             self._mutators[k] = config
             self.mutator_rows[k] = config.as_row()
 
@@ -678,10 +646,10 @@ class PhysicsWorld:
         self._events = [[] for _ in range(self.n_arenas)]
         return events
 
-    def pybullet_bodies(self) -> tuple[list[int], list[int]]:
-        """(ball body ids by arena, car body ids by batch row) of the PyBullet world ``client``: for benchmarks
-        that step the bare world; the physics owns these bodies."""
-        return list(self._ball_bodies), list(self._car_bodies)
+    def pybullet_car_bodies(self) -> list[int]:
+        """The cars' body ids (by batch row) in the PyBullet world ``client``, for benchmarks that step the bare
+        world; the physics owns these bodies. (The balls are not PyBullet bodies.)"""
+        return list(self._car_bodies)
 
     def clear_events(self, arena: int | None = None) -> None:
         """Forget the undrained events of ``arena`` (every arena if None)."""

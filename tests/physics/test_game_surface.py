@@ -171,7 +171,8 @@ def test_ball_touch_events_and_hit_info():
     assert np.dot(first.contact_normal, -rel / np.linalg.norm(rel)) > 0.95  # car -> ball
     info = cars[0].get_ball_hit_info()
     assert info.tick == touches[-1].tick
-    assert info.extra_impulse_tick == max(e.tick for e in touches if e.extra_impulse)
+    assert [e.tick for e in touches if e.extra_impulse] == [first.tick]  # one push per touch, as in RocketSim
+    assert info.extra_impulse_tick == first.tick
     assert np.linalg.norm(batch.arenas[0].ball.get_state().vel) > 1000.0
     batch.close()
 
