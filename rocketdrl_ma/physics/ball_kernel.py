@@ -7,8 +7,9 @@ for everything):
 
 - **Contacts at the start of the tick.** A contact exists when the gap is at most Bullet's contact-breaking
   distance (measured in RocketSim: ``BALL_WORLD_CONTACT_GAP`` against the arena, ``CAR_BALL_CONTACT_GAP`` against a
-  car). The arena is ``arena_geometry``'s exact distance field (and a minigame's static boxes); a car is its
-  hitbox, a box whose edges are rounded by Bullet's 2 uu collision margin.
+  car). The arena is ``arena_geometry``'s exact surface (``surface_contacts``: every surface the ball reaches, none
+  buried inside another piece of the arena) and a minigame's static boxes; a car is its hitbox, a box whose edges
+  are rounded by Bullet's 2 uu collision margin.
 - **Ball-arena: one merged contact** (RocketSim's "special" contact): the mean normal of everything the ball
   touches, restitution 0.6 from the approach speed before gravity (none under 10 uu/s), friction 0.35, no
   position correction.
@@ -26,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from . import constants as C
-from .arena_geometry import arena_sdf
+from .arena_geometry import surface_contacts
 from .mutators import MUT_BALL_DRAG, MUT_BALL_HIT_EXTRA_SCALE, MUT_BALL_MAX_SPEED
 from .vec import mat_vec, vcross, vdot
 
@@ -189,8 +190,9 @@ def ball_tick(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_ve
     adds it and takes it off again. Returns the number of touching cars."""
     n_cars = car_pos.shape[0]
     n_touch = 0
-    rows = np.zeros((n_cars + 2 + boxes.shape[0], _ROW))
+    rows = np.zeros((n_cars + 10 + boxes.shape[0], _ROW))
     arena_touches = np.zeros(ball_pos.shape[0], dtype=np.int64)
+    surface = np.zeros((8, 4))
     for i in range(n_cars):
         touched[i] = False
         car_push[i, :] = 0.0
@@ -241,11 +243,10 @@ def ball_tick(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_ve
             cache += extra
         # ---- the arena (and static boxes): one merged contact for the velocities, and each point's overlap
         merged = n_rows
-        n_points = 0
-        d, nx, ny, nz = arena_sdf(ball_pos[k, 0], ball_pos[k, 1], ball_pos[k, 2])
-        if d - C.BALL_RADIUS <= BALL_WORLD_CONTACT_GAP:
-            _world_point(rows[merged + 1 + n_points], np.array([nx, ny, nz]), d - C.BALL_RADIUS)
-            n_points += 1
+        n_points = surface_contacts(ball_pos[k, 0], ball_pos[k, 1], ball_pos[k, 2],
+                                    C.BALL_RADIUS + BALL_WORLD_CONTACT_GAP, surface)
+        for c in range(n_points):
+            _world_point(rows[merged + 1 + c], surface[c, 1:4], surface[c, 0] - C.BALL_RADIUS)
         for b in range(boxes.shape[0]):
             if int(boxes[b, 0]) == k:
                 db, nb = _static_box_sdf(ball_pos[k], boxes[b])
