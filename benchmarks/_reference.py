@@ -79,7 +79,8 @@ def rocketsim_runner(team_size: int, seed: int = 0) -> Callable[[int], None]:
 
 def bare_pybullet_runner(team_size: int, n_arenas: int = 1, seed: int = 0,
                          state_io: bool = False) -> tuple[Callable[[int], None], object]:
-    """Our PyBullet world (arena meshes, planes, balls, car boxes) stepped by ``stepSimulation`` alone.
+    """Our PyBullet world (arena meshes, planes, car boxes; the balls are not PyBullet bodies) stepped by
+    ``stepSimulation`` alone.
 
     No car model, no state reads: the cost of Bullet's collision detection and solver for these bodies, which is
     the ceiling of a design that steps PyBullet every tick. With ``state_io`` each tick also makes the PyBullet
@@ -99,7 +100,8 @@ def bare_pybullet_runner(team_size: int, n_arenas: int = 1, seed: int = 0,
                 arena.add_car(team=team)
         arena.reset_kickoff(seed=seed)
     client = batch.client
-    bodies, cars = batch._ball_bodies + batch._car_bodies, batch._car_bodies
+    cars = batch.pybullet_car_bodies()
+    bodies = cars
     still = [0.0, 0.0, 0.0]
 
     def run(decisions: int) -> None:

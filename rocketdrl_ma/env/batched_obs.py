@@ -13,8 +13,6 @@ import numpy as np
 
 from rocketdrl_ma.physics import ArenaBatch
 from rocketdrl_ma.physics import constants as C
-from rocketdrl_ma.physics.car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BOOST, CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED,
-                                             CS_IS_DEMOED, CS_ON_GROUND)
 from rocketdrl_ma.rules.state import BLUE, GameState, agent_team
 
 from .observations import (_BALL_MIRROR, _BALL_SCALE, _CAR_SCALE, _FEATURE_MIRROR, BALL_FEATURES, CAR_FEATURES,
@@ -38,21 +36,21 @@ class BatchedTeamRelativeObs:
         n_agents = len(self.agents)
         if any(len(state.cars) != n_agents for state in states):
             return None
-        batch._read_state()
-        cs = batch.cs[car_rows]
+        a = batch.arrays()
         world = np.zeros(car_rows.shape + (len(CAR_FEATURES),))  # car_features of every car, world frame
-        np.divide(np.concatenate((batch.car_pos[car_rows], batch.car_vel[car_rows], batch.car_ang_vel[car_rows],
-                                  batch.car_rot[car_rows][..., 0], batch.car_rot[car_rows][..., 2]), axis=-1),
+        rot = a.car_rot[car_rows]
+        np.divide(np.concatenate((a.car_pos[car_rows], a.car_vel[car_rows], a.car_ang_vel[car_rows],
+                                  rot[..., 0], rot[..., 2]), axis=-1),
                   _CAR_SCALE, out=world[..., :15])
-        on_ground = cs[..., CS_ON_GROUND] != 0.0  # bool() of the state's float, as CarState holds it
-        world[..., 15] = cs[..., CS_BOOST] / C.BOOST_MAX
+        on_ground = a.car_on_ground[car_rows] != 0.0  # bool() of the state's float, as CarState holds it
+        world[..., 15] = a.car_boost[car_rows] / C.BOOST_MAX
         world[..., 16] = on_ground
-        world[..., 17] = on_ground | ((cs[..., CS_HAS_DOUBLE_JUMPED] == 0.0) & (cs[..., CS_HAS_FLIPPED] == 0.0)
-                                      & (cs[..., CS_AIR_TIME_SINCE_JUMP] < C.DOUBLEJUMP_MAX_DELAY))
-        world[..., 18] = cs[..., CS_IS_DEMOED] != 0.0
+        world[..., 17] = on_ground | ((a.car_has_double_jumped[car_rows] == 0.0) & (a.car_has_flipped[car_rows] == 0.0)
+                                      & (a.car_air_time_since_jump[car_rows] < C.DOUBLEJUMP_MAX_DELAY))
+        world[..., 18] = a.car_is_demoed[car_rows] != 0.0
         world[..., 19] = 1.0
-        ball = np.concatenate((batch.ball_pos, batch.ball_vel, batch.ball_ang_vel), axis=1)[:len(states)]
-        timers = batch.pad_timer[:len(states)] / PAD_COOLDOWN
+        ball = np.concatenate((a.ball_pos, a.ball_vel, a.ball_ang_vel), axis=1)[:len(states)]
+        timers = a.pad_timers[:len(states)] / PAD_COOLDOWN
         frames = {BLUE: (world, ball / _BALL_SCALE, timers)}
         if any(team != BLUE for team in self._teams):
             frames[1 - BLUE] = (world * _FEATURE_MIRROR, ball * _BALL_MIRROR / _BALL_SCALE, timers[:, PAD_MIRROR])

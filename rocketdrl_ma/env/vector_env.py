@@ -129,7 +129,8 @@ class VectorEnv:
     def _all_observations(self) -> np.ndarray:
         """Every lane's observations of its state after this decision, built at once from the batch arrays."""
         states = [lane.game_state for lane in self.lanes]
-        car_rows = np.array([[lane.rules.cars[agent]._k for agent in self.possible_agents] for lane in self.lanes])
+        car_rows = np.array([[lane.rules.cars[agent].batch_row for agent in self.possible_agents]
+                             for lane in self.lanes])
         batched = self._batched_obs.build(self.batch, car_rows, states)
         if batched is None:  # a car is missing from a state: the reference builder, agent by agent
             batched = [[lane.obs_builder.build(agent, state) for agent in self.possible_agents]
@@ -138,17 +139,12 @@ class VectorEnv:
 
     def _run_ticks(self) -> None:
         batch, lanes = self.batch, self.lanes
-        arena_of_car = {car.id: k for k, lane in enumerate(lanes) for car in lane.rules.cars.values()}
         for _ in range(self.tick_skip):
             for lane in lanes:
                 lane.rules.apply_controls()
             batch.step(1)
-            per_arena: list[list[tuple]] = [[] for _ in lanes]
-            for event in batch.events:  # every raw event names a car of its arena third: (tick, kind, car_id, ...)
-                per_arena[arena_of_car[event[2]]].append(event)
-            batch.clear_events()
-            for lane, events in zip(lanes, per_arena):
-                lane.rules.end_tick(events)
+            for k, lane in enumerate(lanes):
+                lane.rules.end_tick(batch.drain_events(k))
 
     # ------------------------------------------------------------------ the rest
     def state(self) -> np.ndarray:

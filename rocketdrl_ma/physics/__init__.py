@@ -2,10 +2,43 @@
 
 Imports nothing else of the package: rules, env, server and policies build on this, never the reverse.
 """
-from .arena import Arena, Ball, Car
+import hashlib
+from pathlib import Path
+
+
+def _drop_stale_kernel_caches() -> None:
+    """Numba keys a cached kernel on its own source file, but the kernels compile in functions and constants of
+    the other physics modules: after any of them changes, a cache could run the old code. A stamp of all of
+    them decides when the caches go."""
+    here = Path(__file__).parent
+    stamp = hashlib.sha256(b"".join(p.read_bytes() for p in sorted(here.glob("*.py")))).hexdigest()
+    cache = here / "__pycache__"
+    marker = cache / "kernels.stamp"
+    try:
+        if marker.read_text() == stamp:
+            return
+    except OSError:
+        pass
+    try:
+        for f in cache.glob("*.nb[ci]"):
+            f.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        marker.write_text(stamp)
+    except OSError:  # a read-only install: numba cannot cache there either
+        pass
+
+
+_drop_stale_kernel_caches()
+
+from .arena import Arena, Ball, BoostPad, Car
 from .batch import ArenaBatch
 from .car_config import PRESETS, CarConfig, get_preset
-from .state import BallState, CarControls, CarState, yaw_rot_mat
+from .events import BallTouch, BoostPickup, Bump, CarHit, Demo, PhysicsEvent, PhysicsEventKind
+from .mutators import DemoMode, MutatorConfig
+from .state import BallHitInfo, BallState, BoostPadState, CarControls, CarExtraState, CarState, yaw_rot_mat
+from .world import BatchArrays, PhysicsWorld
 
-__all__ = ["Arena", "ArenaBatch", "Ball", "BallState", "Car", "CarConfig", "CarControls", "CarState", "PRESETS",
-           "get_preset", "yaw_rot_mat"]
+__all__ = ["Arena", "ArenaBatch", "Ball", "BallHitInfo", "BallState", "BallTouch", "BatchArrays", "BoostPad",
+           "BoostPadState", "BoostPickup", "Bump", "Car", "CarConfig", "CarControls", "CarExtraState", "CarHit",
+           "CarState", "Demo", "DemoMode", "MutatorConfig", "PRESETS", "PhysicsEvent", "PhysicsEventKind",
+           "PhysicsWorld", "get_preset", "yaw_rot_mat"]

@@ -1,6 +1,8 @@
 """The single-arena API, shaped like RocketSim's Python binding so RLGym users feel at home.
 
 An ``Arena`` is a view on one arena of an ``ArenaBatch``; ``Arena()`` on its own makes a batch of one.
+Game logic uses only this surface: controls and states, ``MutatorConfig``, typed events (``drain_events``),
+boost pads (``get_boost_pads``), each car's last ball hit and bump cooldown.
 """
 from __future__ import annotations
 
@@ -10,13 +12,17 @@ import numpy as np
 
 from . import constants as C
 from .arena_geometry import is_inside_arena
-from .batch import ArenaBatch, _box_vector
+from .world import PhysicsWorld, _box_vector
 from .car_config import CarConfig
-from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BOOST, CS_DEMO_TIMER, CS_FLIP_TIME, CS_HANDBRAKE,
-                         CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_FLIPPING,
-                         CS_IS_JUMPING, CS_IS_SUPERSONIC, CS_JUMP_TIME, CS_ON_GROUND, CS_SUPERSONIC_TIME,
-                         CS_TICK_MEMORY, CS_WHEEL_0)
-from .state import BallState, CarControls, CarState, _trusted, yaw_rot_mat
+from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_AUTOFLIP_SCALE, CS_AUTOFLIP_TIMER, CS_BOOST, CS_BOOSTING_TIME,
+                         CS_DEMO_TIMER, CS_FLIP_TIME, CS_FLIP_TORQUE_X, CS_FLIP_TORQUE_Y, CS_HANDBRAKE,
+                         CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_AUTOFLIPPING, CS_IS_DEMOED,
+                         CS_IS_FLIPPING, CS_IS_JUMPING, CS_IS_SUPERSONIC, CS_JUMP_TIME, CS_LAST_JUMP, CS_ON_GROUND,
+                         CS_SUPERSONIC_TIME, CS_TICK_MEMORY, CS_WHEEL_0)
+from .events import PhysicsEvent
+from .mutators import MutatorConfig
+from .state import (BallHitInfo, BallState, BoostPadState, CarControls, CarExtraState, CarState, _trusted,
+                    yaw_rot_mat)
 
 
 def _check_inside(name: str, pos: np.ndarray, margin: float) -> None:
@@ -27,12 +33,18 @@ def _check_inside(name: str, pos: np.ndarray, margin: float) -> None:
 class Car:
     """A car in an arena. Its identity is stable; its state lives in the batch arrays."""
 
-    def __init__(self, batch: ArenaBatch, car_id: int, team: int, config: CarConfig):
+    def __init__(self, batch: PhysicsWorld, car_id: int, team: int, config: CarConfig):
         self._batch, self.id, self.team, self.config = batch, car_id, team, config
 
     @property
     def _k(self) -> int:
         return self._batch._slot(self.id).index
+
+    @property
+    def batch_row(self) -> int:
+        """This car's row in the batch's arrays (``ArenaBatch.controls``, ``ArenaBatch.arrays()``); it changes
+        when a car is added to or removed from the batch."""
+        return self._k
 
     def set_controls(self, controls: CarControls) -> None:
         if not isinstance(controls, CarControls):
@@ -91,6 +103,42 @@ class Car:
         cs[CS_DEMO_TIMER] = state.demo_respawn_timer if state.is_demoed else 0.0
         cs[list(CS_TICK_MEMORY)] = 0.0
 
+    def get_extra_state(self) -> CarExtraState:
+        b = self._batch
+        cs = b.cs[self._k].tolist()
+        slot = b._slot(self.id)
+        victim = slot.contact_id
+        cooldown = max(slot.contact_until - b.tick_count, 0) * b.dt if victim is not None else 0.0
+        return CarExtraState(
+            holding_jump=cs[CS_LAST_JUMP] > 0.5, boost_active_time_s=cs[CS_BOOSTING_TIME],
+            flip_torque=(cs[CS_FLIP_TORQUE_X], cs[CS_FLIP_TORQUE_Y], 0.0),
+            is_auto_flipping=cs[CS_IS_AUTOFLIPPING] > 0.5, auto_flip_timer_s=cs[CS_AUTOFLIP_TIMER],
+            auto_flip_direction=cs[CS_AUTOFLIP_SCALE], car_contact_id=victim, car_contact_cooldown_s=cooldown)
+
+    def set_extra_state(self, extra: CarExtraState) -> None:
+        """Restore what ``get_extra_state`` gave (after ``set_state``, which clears it)."""
+        if not isinstance(extra, CarExtraState):
+            raise ValueError(f"extra: expected CarExtraState, got {type(extra).__name__}")
+        b = self._batch
+        slot = b._slot(self.id)
+        if extra.car_contact_id is not None:
+            other = b._slot_by_id.get(extra.car_contact_id)
+            if other is None or other.arena != slot.arena or other is slot:
+                raise ValueError(f"car_contact_id: {extra.car_contact_id!r} is not another car of this arena")
+        cs = b.cs[self._k]
+        cs[CS_LAST_JUMP] = extra.holding_jump
+        cs[CS_BOOSTING_TIME] = extra.boost_active_time_s
+        cs[CS_FLIP_TORQUE_X], cs[CS_FLIP_TORQUE_Y] = extra.flip_torque[0], extra.flip_torque[1]
+        cs[CS_IS_AUTOFLIPPING] = extra.is_auto_flipping
+        cs[CS_AUTOFLIP_TIMER] = extra.auto_flip_timer_s
+        cs[CS_AUTOFLIP_SCALE] = extra.auto_flip_direction
+        slot.contact_id = extra.car_contact_id
+        slot.contact_until = b.tick_count + int(round(extra.car_contact_cooldown_s * b.tick_rate))
+
+    def get_ball_hit_info(self) -> BallHitInfo | None:
+        """This car's last touch of the ball, or None if it has not touched it."""
+        return self._batch._slot(self.id).ball_hit
+
     def demolish(self) -> None:
         self._batch.demolish(self.id)
 
@@ -102,7 +150,7 @@ class Car:
 
 
 class Ball:
-    def __init__(self, batch: ArenaBatch, arena: int):
+    def __init__(self, batch: PhysicsWorld, arena: int):
         self._batch, self._arena = batch, arena
 
     def get_state(self) -> BallState:
@@ -118,6 +166,15 @@ class Ball:
         _check_inside("pos", state.pos, 0.0)
         self._batch.set_ball(self._arena, state.pos, state.vel, state.ang_vel)
 
+    def get_pos(self) -> np.ndarray:
+        """The ball's centre (uu), a copy: cheaper than ``get_state`` when game logic needs only this."""
+        self._batch._read_state()
+        return self._batch.ball_pos[self._arena].copy()
+
+    def get_vel(self) -> np.ndarray:
+        self._batch._read_state()
+        return self._batch.ball_vel[self._arena].copy()
+
     @staticmethod
     def get_radius() -> float:
         return C.BALL_RADIUS
@@ -132,27 +189,53 @@ class Ball:
         self._batch.ball_frozen[self._arena] = False
 
 
+class BoostPad:
+    """One of the 34 boost pads of an arena, in the order of RocketSim's ``Arena.get_boost_pads()``."""
+
+    def __init__(self, batch: PhysicsWorld, arena: int, index: int):
+        self._batch, self._arena, self.index = batch, arena, index
+        self.pos = C.BOOST_PAD_POSITIONS[index].copy()
+        self.is_big = bool(C.BOOST_PAD_IS_BIG[index])
+
+    def get_state(self) -> BoostPadState:
+        return BoostPadState(cooldown_s=float(self._batch.pad_timer[self._arena, self.index]))
+
+    def set_state(self, state: BoostPadState) -> None:
+        if not isinstance(state, BoostPadState):
+            raise ValueError(f"state: expected BoostPadState, got {type(state).__name__}")
+        self._batch.pad_timer[self._arena, self.index] = state.cooldown_s
+
+    def __repr__(self) -> str:
+        return f"BoostPad(index={self.index}, pos={self.pos.tolist()}, is_big={self.is_big})"
+
+
 class Arena:
     """One soccar arena: ``Arena(tick_rate=120)``, ``add_car``, ``step``, ``reset_kickoff`` (uu, z up)."""
 
     def __init__(self, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
-        batch = ArenaBatch(1, tick_rate=tick_rate, seed=seed)
+        batch = PhysicsWorld(1, tick_rate=tick_rate, seed=seed)
         self._init_view(batch, 0)
-        batch.arenas[0] = self
+        batch.arenas.append(self)
 
     @classmethod
-    def _view(cls, batch: ArenaBatch, index: int) -> "Arena":
+    def _view(cls, batch: PhysicsWorld, index: int) -> "Arena":
         arena = cls.__new__(cls)
         arena._init_view(batch, index)
         return arena
 
-    def _init_view(self, batch: ArenaBatch, index: int) -> None:
+    def _init_view(self, batch: PhysicsWorld, index: int) -> None:
         self._batch = batch
         self.index = index
         self.ball = Ball(batch, index)
         self._cars: list[Car] = []
 
     # ---- RocketSim-style API
+    @property
+    def batch(self) -> PhysicsWorld:
+        """The batch this arena belongs to: its ``ArenaBatch``, or for a lone ``Arena`` its own world of one (the
+        ``ArenaBatch`` machinery without other arenas)."""
+        return self._batch
+
     @property
     def tick_rate(self) -> int:
         return self._batch.tick_rate
@@ -204,7 +287,7 @@ class Arena:
                 if team == 1:
                     x, y, yaw = -x, -y, yaw + math.pi
                 car.set_state(CarState(pos=np.array([x, y, C.CAR_SPAWN_REST_Z]), rot_mat=yaw_rot_mat(yaw),
-                                       boost=C.BOOST_SPAWN_AMOUNT, on_ground=True,
+                                       boost=self.get_mutator_config().car_spawn_boost, on_ground=True,
                                        wheels_in_contact=(True, True, True, True)))
         self._batch.pad_timer[self.index] = 0.0
         self.ball.set_state(BallState())
@@ -212,9 +295,10 @@ class Arena:
     def scoring_team(self) -> int | None:
         """The team whose goal the ball is in (the whole ball past the line): 0 blue scored, 1 orange, or None."""
         y = self._batch.ball_pos[self.index, 1] if self._batch._state_fresh else self.ball.get_state().pos[1]
-        if y > C.GOAL_SCORE_THRESHOLD_Y + C.BALL_RADIUS:
+        threshold = self.get_mutator_config().goal_threshold_y
+        if y > threshold + C.BALL_RADIUS:
             return 0
-        if y < -(C.GOAL_SCORE_THRESHOLD_Y + C.BALL_RADIUS):
+        if y < -(threshold + C.BALL_RADIUS):
             return 1
         return None
 
@@ -237,9 +321,35 @@ class Arena:
     def remove_static_box(self, box_id: int) -> None:
         self._batch.remove_static_box(box_id)
 
+    # ---- game-mode settings, events, boost pads
+    def set_mutator_config(self, config: MutatorConfig) -> None:
+        """Play this arena with ``config`` (RocketSim's ``Arena.set_mutator_config``)."""
+        self._batch.set_mutator_config(config, None if self._batch.n_arenas == 1 else self.index)
+
+    def get_mutator_config(self) -> MutatorConfig:
+        return self._batch.get_mutator_config(self.index)
+
+    def drain_events(self) -> list[PhysicsEvent]:
+        """This arena's events (``BallTouch``, ``Bump``, ``Demo``, ``BoostPickup``) since the last drain, in the
+        order the ticks produced them; they are removed."""
+        return self._batch.drain_events(self.index)
+
+    def clear_events(self) -> None:
+        self._batch.clear_events(self.index)
+
+    def get_boost_pads(self) -> list[BoostPad]:
+        """The 34 pads in RocketSim's ``Arena.get_boost_pads()`` order (RLGym's ``BOOST_LOCATIONS``)."""
+        return [BoostPad(self._batch, self.index, k) for k in range(len(C.BOOST_PAD_POSITIONS))]
+
     def boost_pad_timers(self) -> np.ndarray:
-        """Seconds until each of the 34 pads (RLBot order) is active again; 0 = active."""
+        """Seconds until each of the 34 pads (``get_boost_pads`` order) is active again; 0 = active."""
         return self._batch.pad_timer[self.index].copy()
+
+    def set_boost_pad_timers(self, timers_s: np.ndarray) -> None:
+        t = np.asarray(timers_s, dtype=np.float64)
+        if t.shape != (len(C.BOOST_PAD_POSITIONS),) or not np.all(np.isfinite(t)) or np.any(t < 0.0):
+            raise ValueError(f"timers_s: expected {len(C.BOOST_PAD_POSITIONS)} finite numbers >= 0, got {timers_s!r}")
+        self._batch.pad_timer[self.index] = t
 
     def close(self) -> None:
         self._batch.close()

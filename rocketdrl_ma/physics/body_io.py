@@ -1,4 +1,4 @@
-"""Reading PyBullet bodies into the batch arrays with as little Python per body as possible.
+"""Reading the cars' PyBullet bodies into the batch arrays with as little Python per body as possible.
 
 PyBullet has no call that reads several bodies, so every body costs two calls; everything after them
 (metres to uu, arena origins, quaternion to rotation matrix) runs for all bodies at once in one compiled
@@ -46,24 +46,16 @@ def quat_to_mat(q, out):
 
 
 @njit(cache=True)
-def unpack_rows(rows, targets, n_balls, origins, car_arena, ball_pos, ball_vel, ball_ang_vel,
-                car_pos, car_quat, car_rot, car_vel, car_ang_vel):
-    """Row ``r`` of ``read_rows`` into ball ``targets[r]`` (< n_balls) or car ``targets[r] - n_balls``, in uu
-    relative to its arena's origin (the arithmetic of a whole-array ``pos * UU_PER_M - origin``)."""
+def unpack_rows(rows, cars, origins, car_arena, car_pos, car_quat, car_rot, car_vel, car_ang_vel):
+    """Row ``r`` of ``read_rows`` into car ``cars[r]``, in uu relative to its arena's origin (the arithmetic of a
+    whole-array ``pos * UU_PER_M - origin``)."""
     for r in range(rows.shape[0]):
-        t = targets[r]
-        if t < n_balls:
-            for j in range(3):
-                ball_pos[t, j] = rows[r, j] * C.UU_PER_M - origins[t, j]
-                ball_vel[t, j] = rows[r, 7 + j] * C.UU_PER_M
-                ball_ang_vel[t, j] = rows[r, 10 + j]
-        else:
-            i = t - n_balls
-            a = car_arena[i]
-            for j in range(3):
-                car_pos[i, j] = rows[r, j] * C.UU_PER_M - origins[a, j]
-                car_vel[i, j] = rows[r, 7 + j] * C.UU_PER_M
-                car_ang_vel[i, j] = rows[r, 10 + j]
-            for j in range(4):
-                car_quat[i, j] = rows[r, 3 + j]
-            quat_to_mat(car_quat[i], car_rot[i])
+        i = cars[r]
+        a = car_arena[i]
+        for j in range(3):
+            car_pos[i, j] = rows[r, j] * C.UU_PER_M - origins[a, j]
+            car_vel[i, j] = rows[r, 7 + j] * C.UU_PER_M
+            car_ang_vel[i, j] = rows[r, 10 + j]
+        for j in range(4):
+            car_quat[i, j] = rows[r, 3 + j]
+        quat_to_mat(car_quat[i], car_rot[i])

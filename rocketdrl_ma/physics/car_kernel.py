@@ -9,11 +9,17 @@ columns are named below, so the whole model is one compiled loop with no Python 
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from . import constants as C
 from .arena_geometry import arena_raycast
+from .mutators import (MUT_BOOST_ACCEL_AIR, MUT_BOOST_ACCEL_GROUND, MUT_BOOST_PADS, MUT_BOOST_USED_PER_SECOND,
+                       MUT_DODGE_DEADZONE, MUT_JUMP_ACCEL, MUT_JUMP_IMMEDIATE_VEL, MUT_PAD_COOLDOWN_BIG,
+                       MUT_PAD_COOLDOWN_SMALL, MUT_UNLIMITED_DOUBLE_JUMPS, MUT_UNLIMITED_FLIPS)
+from .vec import mat_t_vec, mat_vec, vcross, vcross_into, vdot
 
 # ---- columns of the car-state matrix
 CS_BOOST = 0
@@ -27,30 +33,29 @@ CS_IS_FLIPPING = 7
 CS_FLIP_TIME = 8
 CS_FLIP_TORQUE_X = 9
 CS_FLIP_TORQUE_Y = 10
-CS_AIR_TIME = 11
-CS_AIR_TIME_SINCE_JUMP = 12
-CS_BOOSTING_TIME = 13
-CS_IS_BOOSTING = 14
-CS_LAST_JUMP = 15
-CS_ON_GROUND = 16
-CS_NUM_WHEELS = 17
-CS_WHEEL_0 = 18  # four columns: 1.0 where that wheel's ray hits
-CS_IS_SUPERSONIC = 22
-CS_SUPERSONIC_TIME = 23
-CS_IS_DEMOED = 24
-CS_DEMO_TIMER = 25
-CS_WORLD_CONTACT = 26  # some wheel touches the arena
-CS_STEER_ANGLE = 27  # the wheel set-up of the last tick: Bullet's vehicle applies it one tick late
-CS_ENGINE = 28
-CS_BRAKE = 29
-CS_LAT_FRICTION_0 = 30  # four columns
-CS_LONG_FRICTION_0 = 34  # four columns
-CS_IS_AUTOFLIPPING = 38
-CS_AUTOFLIP_TIMER = 39
-CS_AUTOFLIP_SCALE = 40
-CS_BODY_CONTACT = 41  # the hitbox touched the arena last tick
-CS_BODY_NORMAL_X = 42  # three columns: that contact's normal
-CS_SIZE = 45
+CS_AIR_TIME_SINCE_JUMP = 11
+CS_BOOSTING_TIME = 12
+CS_IS_BOOSTING = 13
+CS_LAST_JUMP = 14
+CS_ON_GROUND = 15
+CS_NUM_WHEELS = 16
+CS_WHEEL_0 = 17  # four columns: 1.0 where that wheel's ray hits
+CS_IS_SUPERSONIC = 21
+CS_SUPERSONIC_TIME = 22
+CS_IS_DEMOED = 23
+CS_DEMO_TIMER = 24
+CS_WORLD_CONTACT = 25  # some wheel touches the arena
+CS_STEER_ANGLE = 26  # the wheel set-up of the last tick: Bullet's vehicle applies it one tick late
+CS_ENGINE = 27
+CS_BRAKE = 28
+CS_LAT_FRICTION_0 = 29  # four columns
+CS_LONG_FRICTION_0 = 33  # four columns
+CS_IS_AUTOFLIPPING = 37
+CS_AUTOFLIP_TIMER = 38
+CS_AUTOFLIP_SCALE = 39
+CS_BODY_CONTACT = 40  # the hitbox touched the arena last tick
+CS_BODY_NORMAL_X = 41  # three columns: that contact's normal
+CS_SIZE = 44
 # Memory of earlier ticks that CarState does not carry (the last jump input for edge detection, boost's minimum
 # duration, the wheel set-up Bullet applies one tick late, autoflip, body contact): set_state clears it, so a
 # state set on a used car plays on exactly as on a new car (RocketSim's CarState carries last_controls likewise).
@@ -61,10 +66,10 @@ CS_TICK_MEMORY = (CS_BOOSTING_TIME, CS_IS_BOOSTING, CS_LAST_JUMP, CS_STEER_ANGLE
 
 _THROTTLE_CURVE = np.array(C.THROTTLE_TORQUE_CURVE)
 _STEER_CURVE = np.array(C.STEER_ANGLE_CURVE)
-_STEER_CURVE_3W = np.array(((0.0, 0.342473), (2300.0, 0.034837)))
+_STEER_CURVE_3W = np.array(C.STEER_ANGLE_CURVE_THREE_WHEEL)
 _POWERSLIDE_CURVE = np.array(C.POWERSLIDE_STEER_ANGLE_CURVE)
 _LAT_CURVE = np.array(C.LAT_FRICTION_CURVE)
-_LAT_CURVE_3W = np.array(((0.0, 0.30), (1.0, 0.25)))
+_LAT_CURVE_3W = np.array(C.LAT_FRICTION_CURVE_THREE_WHEEL)
 _HB_LONG_CURVE = np.array(C.HANDBRAKE_LONG_FRICTION_CURVE)
 _NON_STICKY_CURVE = np.array(C.NON_STICKY_FRICTION_CURVE)
 _AIR_TORQUE = np.array(C.CAR_AIR_CONTROL_TORQUE) * C.CAR_TORQUE_SCALE
@@ -85,42 +90,8 @@ def interp(curve, x):
     return curve[curve.shape[0] - 1, 1]
 
 
-@njit(cache=True)
-def _dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(cache=True)
-def _mv(R, x):
-    """R @ x for a 3x3 matrix, without BLAS."""
-    return np.array([R[0, 0] * x[0] + R[0, 1] * x[1] + R[0, 2] * x[2],
-                     R[1, 0] * x[0] + R[1, 1] * x[1] + R[1, 2] * x[2],
-                     R[2, 0] * x[0] + R[2, 1] * x[1] + R[2, 2] * x[2]])
-
-
-@njit(cache=True)
-def _mtv(R, x):
-    """R.T @ x for a 3x3 matrix, without BLAS."""
-    return np.array([R[0, 0] * x[0] + R[1, 0] * x[1] + R[2, 0] * x[2],
-                     R[0, 1] * x[0] + R[1, 1] * x[1] + R[2, 1] * x[2],
-                     R[0, 2] * x[0] + R[1, 2] * x[1] + R[2, 2] * x[2]])
-
-
-@njit(cache=True)
-def _cross(a, b):
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
-@njit(cache=True)
-def _set_cross(a, b, out):
-    """out = a x b (``_cross`` without a new array; ``out`` must not be ``a`` or ``b``)."""
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
-
-
 # The helpers below run several times per car and tick: they work on scalars (the arithmetic of
-# ``_mtv(R, _cross(...))`` and friends term by term) because a small array per step cost more than the maths.
+# ``mat_t_vec(R, vcross(...))`` and friends term by term) because a small array per step cost more than the maths.
 @njit(cache=True)
 def _inv_mass_along(R, inv_inertia, rel, direction):
     """1/m_eff of a unit impulse along ``direction`` applied at offset ``rel`` from the centre of mass."""
@@ -162,31 +133,58 @@ def _ray_sphere(origin, direction, center, radius):
     return t if t >= 0.0 else -1.0
 
 
+# ================================================================= one tick of the car model, stage by stage
+# The stages are inlined into ``car_pre_tick``'s loop (``inline="always"``): as separate calls they cost a third
+# more per car.
+class WheelContacts(NamedTuple):
+    """Where each of a car's 4 wheel rays hit this tick (scratch reused by every car)."""
+    hit: np.ndarray        # (4,) bool: the ray hit the arena or the ball
+    hit_world: np.ndarray  # (4,) bool: it hit the arena (sticky force)
+    dist: np.ndarray       # (4,) uu along the ray
+    normal: np.ndarray     # (4, 3) unit surface normals
+    hard_point: np.ndarray  # (4, 3) the wheels' hard points (ray origins), world frame
+
+
+class Scratch(NamedTuple):
+    """Vectors the stages work in: a lever arm, a contact-point velocity, a cross product, an axle, a direction."""
+    rel: np.ndarray
+    v_cp: np.ndarray
+    cross: np.ndarray
+    axle: np.ndarray
+    f_dir: np.ndarray
+
+
+class CarFrame(NamedTuple):
+    fwd: np.ndarray
+    right: np.ndarray
+    up: np.ndarray
+    down: np.ndarray
+
+
 @njit(cache=True)
 def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
-                 wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, dt):
+                 wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut, dt):
     """Advance every active, non-demoed car's model by one tick: writes ``vel``/``ang_vel`` in place.
 
     ``pos``/``vel``/``ang_vel`` are (N, 3), ``rot`` is (N, 3, 3) with columns forward/right/up,
-    ``controls`` is (N, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake.
-    The order follows RocketSim's car update: wheel impulses are computed from the state at the start
-    of the tick with last tick's steering and friction factors, then inputs act, then impulses apply.
+    ``controls`` is (N, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake; ``mut`` holds each arena's
+    ``MutatorConfig.as_row()``.
+
+    The stages follow RocketSim's ``Car::_PreTickUpdate``: the vehicle's first half (wheel rays, then the
+    suspension and tyre impulses from the state at the start of the tick with last tick's steering and
+    friction factors), ``_UpdateWheels``, ``_UpdateAirTorque``, ``_UpdateJump``, ``_UpdateAutoFlip``,
+    ``_UpdateDoubleJumpOrFlip``, ``_UpdateAutoRoll``, the vehicle's second half (the wheel impulses applied),
+    ``_UpdateBoost``.
 
     Returns how many cars' velocities must not be written back to PyBullet (inactive or demolished ones).
     """
-    # Scratch reused by every car (reset per car where the model relies on zeros): fresh small arrays per car
-    # and wheel were most of this kernel's time.
-    fwd, right, up, down = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    # Scratch reused by every car: fresh small arrays per car and wheel were most of this kernel's time.
+    frame = CarFrame(np.empty(3), np.empty(3), np.empty(3), np.empty(3))
+    wheels = WheelContacts(np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_), np.zeros(4), np.zeros((4, 3)),
+                           np.zeros((4, 3)))
+    susp_impulse, fric_impulse, fric_rel = np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((4, 3))
     v0, w0, v, w = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    hit = np.zeros(4, dtype=np.bool_)
-    hit_world = np.zeros(4, dtype=np.bool_)
-    hit_t = np.zeros(4)
-    hit_n = np.zeros((4, 3))
-    hard = np.zeros((4, 3))
-    susp_impulse = np.zeros((4, 3))
-    fric_impulse = np.zeros((4, 3))
-    fric_rel = np.zeros((4, 3))
-    rel, v_cp, axle, f_dir, cross = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    scratch = Scratch(np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3))
     n_unwritable = 0
     for i in range(pos.shape[0]):
         if not active[i] or cs[i, CS_IS_DEMOED] != 0.0:
@@ -194,6 +192,7 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         if not active[i] or cs[i, CS_IS_DEMOED] > 0.5:
             continue
         R = rot[i]
+        fwd, right, up, down = frame
         for j in range(3):
             fwd[j], right[j], up[j] = R[j, 0], R[j, 1], R[j, 2]
             down[j] = -up[j]
@@ -202,357 +201,435 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         w0[:] = ang_vel[i]
         v[:] = v0
         w[:] = w0
-        throttle, steer = controls[i, 0], controls[i, 1]
-        pitch_in, yaw_in, roll_in = controls[i, 2], controls[i, 3], controls[i, 4]
-        jump = controls[i, 5] > 0.5
-        boost_btn = controls[i, 6] > 0.5
-        handbrake = controls[i, 7] > 0.5
-        jump_pressed = jump and cs[i, CS_LAST_JUMP] < 0.5
-        inv_i = inv_inertia[i]
+        car, c, m = cs[i], controls[i], mut[car_arena[i]]  # this car's state row, controls, arena's mutators
+        jump = c[5] > 0.5
+        jump_pressed = jump and car[CS_LAST_JUMP] < 0.5
 
-        # ---- wheel rays against the arena (analytically) and this arena's ball
-        bpos = ball_pos[car_arena[i]]
-        hit[:] = False
-        hit_world[:] = False
-        hit_t[:] = 0.0
-        hit_n[:] = 0.0
-        hard[:] = 0.0
-        for k in range(4):
-            c = wheel_conn[i, k]
-            hp = hard[k]
-            for j in range(3):
-                hp[j] = p[j] + (R[j, 0] * c[0] + R[j, 1] * c[1] + R[j, 2] * c[2])
-            ok, t, nx, ny, nz = arena_raycast(hp[0], hp[1], hp[2], down[0], down[1], down[2], wheel_ray_len[i, k])
-            tb = _ray_sphere(hp, down, bpos, ball_radius)
-            if tb >= 0.0 and tb <= wheel_ray_len[i, k] and (not ok or tb < t):
-                for j in range(3):
-                    rel[j] = hp[j] + down[j] * tb - bpos[j]
-                norm = np.sqrt(_dot(rel, rel))
-                for j in range(3):
-                    hit_n[k, j] = rel[j] / norm
-                hit_t[k] = tb
-                hit[k] = True
-            elif ok:
-                hit_n[k, 0], hit_n[k, 1], hit_n[k, 2] = nx, ny, nz
-                hit_t[k] = t
-                hit[k] = True
-                hit_world[k] = True
-        num_contact = 0
-        num_world = 0
-        for k in range(4):
-            cs[i, CS_WHEEL_0 + k] = 1.0 if hit[k] else 0.0
-            num_contact += hit[k]
-            num_world += hit_world[k]
+        num_contact, num_world = _cast_wheel_rays(p, R, down, wheel_conn[i], wheel_ray_len[i],
+                                                  ball_pos[car_arena[i]], ball_radius, wheels, car, scratch)
         on_ground = num_contact >= C.WHEELS_FOR_ON_GROUND
-        cs[i, CS_NUM_WHEELS] = num_contact
-        cs[i, CS_ON_GROUND] = 1.0 if on_ground else 0.0
-        cs[i, CS_WORLD_CONTACT] = 1.0 if num_world > 0 else 0.0
-
-        # ---- suspension impulses, from the start-of-tick velocity
-        susp_impulse[:] = 0.0
-        for k in range(4):
-            if not hit[k]:
-                continue
-            n = hit_n[k]
-            for j in range(3):
-                rel[j] = hard[k, j] + down[j] * hit_t[k] - p[j]
-            rest = wheel_rest[i, k]
-            susp_len = min(max(hit_t[k] - wheel_radius[i, k], rest - C.SUSPENSION_MAX_TRAVEL),
-                           rest + C.SUSPENSION_MAX_TRAVEL)
-            denom = _dot(n, down)
-            _set_cross(w0, rel, cross)
-            for j in range(3):
-                v_cp[j] = v0[j] + cross[j]
-            if denom >= 0.1 or denom > -1e-3:
-                rel_vel = 0.0
-                clipped_inv = 10.0
-            else:
-                clipped_inv = -1.0 / denom
-                rel_vel = _dot(n, v_cp) * clipped_inv
-            scale = C.SUSPENSION_FORCE_SCALE_FRONT if wheel_is_front[i, k] else C.SUSPENSION_FORCE_SCALE_BACK
-            damping = C.SUSPENSION_DAMP_COMPRESSION if rel_vel < 0.0 else C.SUSPENSION_DAMP_RELAXATION
-            force = (C.SUSPENSION_STIFFNESS * (rest - susp_len) * clipped_inv - damping * rel_vel) * scale
-            if force <= 0.0:
-                continue  # the suspension never pulls
-            # Hard stop: an inelastic push-back once the wheel is near the end of its short soft travel.
-            gap = hit_t[k] - (wheel_ray_len[i, k] - wheel_radius[i, k])
-            m_eff = 1.0 / _inv_mass_along(R, inv_i, rel, n)
-            push = max(m_eff * (-0.2 * gap / dt - _dot(n, v_cp)), 0.0) * (1.0 / 1.5) / 4.0
-            amount = force * dt + push
-            for j in range(3):
-                susp_impulse[k, j] = n[j] * amount
-
-        # ---- tyre impulses, with last tick's steering, engine, brake and friction factors
-        fric_impulse[:] = 0.0
-        fric_rel[:] = 0.0
-        last_angle = cs[i, CS_STEER_ANGLE]
-        cos_l, sin_l = np.cos(last_angle), np.sin(last_angle)
-        for k in range(4):
-            if not hit[k]:
-                continue
-            n = hit_n[k]
-            for j in range(3):
-                rel[j] = hard[k, j] + down[j] * hit_t[k] - p[j]
-            along_up = _dot(rel, up)
-            for j in range(3):  # applied in the centre-of-mass plane: no pitch from braking
-                fric_rel[k, j] = rel[j] - up[j] * along_up
-            if wheel_is_front[i, k]:
-                for j in range(3):
-                    axle[j] = right[j] * cos_l - fwd[j] * sin_l
-            else:
-                axle[:] = right
-            along_n = _dot(axle, n)
-            for j in range(3):
-                axle[j] = axle[j] - n[j] * along_n
-            a_len = np.sqrt(_dot(axle, axle))
-            if a_len < 1e-9:
-                continue
-            for j in range(3):
-                axle[j] /= a_len
-            _set_cross(axle, n, f_dir)
-            _set_cross(w0, rel, cross)
-            for j in range(3):
-                v_cp[j] = v0[j] + cross[j]
-            m_lat = 1.0 / _inv_mass_along(R, inv_i, rel, axle)
-            side = -0.2 * _dot(v_cp, axle) * m_lat
-            engine = cs[i, CS_ENGINE]
-            if engine != 0.0:
-                rolling = engine
-            elif cs[i, CS_BRAKE] != 0.0:
-                b = cs[i, CS_BRAKE]
-                rolling = min(max(-_dot(v_cp, f_dir) * C.BRAKE_SLIP_SCALE, -b), b)
-            else:
-                rolling = 0.0
-            long_amount = rolling * cs[i, CS_LONG_FRICTION_0 + k]
-            lat_amount = side * cs[i, CS_LAT_FRICTION_0 + k]
-            for j in range(3):
-                fric_impulse[k, j] = (f_dir[j] * long_amount + axle[j] * lat_amount) * (C.CAR_MASS / 3.0) * dt
-
-        # ---- this tick's wheel set-up: throttle, brake, steering, friction factors; sticky force
-        hb = cs[i, CS_HANDBRAKE]
-        hb = hb + C.POWERSLIDE_RISE_RATE * dt if handbrake else hb - C.POWERSLIDE_FALL_RATE * dt
-        hb = min(max(hb, 0.0), 1.0)
-        cs[i, CS_HANDBRAKE] = hb
-        v_fwd = _dot(v0, fwd)
-        abs_v_fwd = abs(v_fwd)
-        real_throttle = 1.0 if (boost_btn and cs[i, CS_BOOST] > 0.0) else throttle
-        engine_throttle = real_throttle
-        brake = 0.0
-        if not handbrake:
-            if abs(real_throttle) >= C.THROTTLE_DEADZONE:
-                if abs_v_fwd > C.STOPPING_FORWARD_VEL and real_throttle * v_fwd < 0.0:
-                    brake = 1.0
-                    engine_throttle = 0.0
-            else:
-                engine_throttle = 0.0
-                brake = 1.0 if abs_v_fwd < C.STOPPING_FORWARD_VEL else C.COAST_BRAKE_FACTOR
-        drive_scale = interp(_THROTTLE_CURVE, abs_v_fwd)
-        if num_contact < 3:
-            drive_scale *= 0.25
-        # Per-wheel values in "impulse per (mass/3) per second", RocketSim's friction scale.
-        cs[i, CS_ENGINE] = engine_throttle * C.THROTTLE_TORQUE_AMOUNT * 3.0 * drive_scale
-        cs[i, CS_BRAKE] = brake * C.BRAKE_ACCEL / 4.0 * 3.0
-        angle = interp(_STEER_CURVE_3W if three_wheel[i] else _STEER_CURVE, abs_v_fwd)
-        if hb > 0.0:
-            angle += (interp(_POWERSLIDE_CURVE, abs_v_fwd) - angle) * hb
-        cs[i, CS_STEER_ANGLE] = angle * steer
-        for k in range(4):
-            if not hit[k]:
-                continue
-            n = hit_n[k]
-            if wheel_is_front[i, k]:
-                for j in range(3):
-                    axle[j] = right[j] * cos_l - fwd[j] * sin_l
-            else:
-                axle[:] = right
-            _set_cross(axle, n, f_dir)  # the wheel's rolling direction
-            for j in range(3):
-                rel[j] = hard[k, j] - p[j]
-            _set_cross(w0, rel, cross)
-            for j in range(3):
-                v_cp[j] = v0[j] + cross[j]  # the velocity at the wheel's hard point
-            lat_speed = abs(_dot(v_cp, axle))
-            slip = 0.0
-            if lat_speed > 5.0:
-                slip = lat_speed / (abs(_dot(v_cp, f_dir)) + lat_speed)
-            lat_fric = interp(_LAT_CURVE_3W if three_wheel[i] else _LAT_CURVE, slip)
-            long_fric = 1.0
-            if hb > 0.0:
-                lat_fric *= (C.HANDBRAKE_LAT_FRICTION_FACTOR - 1.0) * hb + 1.0
-                long_fric *= (interp(_HB_LONG_CURVE, slip) - 1.0) * hb + 1.0
-            if real_throttle == 0.0:
-                non_sticky = interp(_NON_STICKY_CURVE, n[2])
-                lat_fric *= non_sticky
-                long_fric *= non_sticky
-            cs[i, CS_LAT_FRICTION_0 + k] = lat_fric
-            cs[i, CS_LONG_FRICTION_0 + k] = long_fric
-        if num_world > 0:
-            n_avg = np.zeros(3)
-            for k in range(4):
-                if hit[k]:
-                    n_avg += hit_n[k]
-            n_avg /= np.sqrt(_dot(n_avg, n_avg))
-            sticky = 0.0 if three_wheel[i] else C.STICKY_FORCE_GROUND
-            if real_throttle != 0.0 or abs_v_fwd > C.STOPPING_FORWARD_VEL:
-                sticky += C.STICKY_FORCE_FULL_STICK_EXTRA * (1.0 - abs(n_avg[2]))
-            v -= n_avg * (sticky * _GRAVITY * dt)
-
-        # ---- air control and flip torque: only with no wheel down
+        _suspension_impulses(p, R, down, v0, w0, inv_inertia[i], wheel_rest[i], wheel_radius[i], wheel_ray_len[i],
+                             wheel_is_front[i], wheels, susp_impulse, scratch, dt)
+        _friction_impulses(p, R, frame, v0, w0, inv_inertia[i], wheel_is_front[i], wheels, car, fric_impulse,
+                           fric_rel, scratch, dt)
+        v_fwd = _update_wheels(frame, v0, w0, p, c, wheel_is_front[i], three_wheel[i], num_contact, num_world,
+                               wheels, car, v, scratch, dt)
         if num_contact == 0:
-            wl = _mtv(R, w)
-            alpha = np.zeros(3)
-            air_control = True
-            flip_time = cs[i, CS_FLIP_TIME]
-            if cs[i, CS_HAS_FLIPPED] > 0.5 and flip_time < C.FLIP_TORQUE_TIME:
-                tx = cs[i, CS_FLIP_TORQUE_X]
-                ty = cs[i, CS_FLIP_TORQUE_Y]
-                if tx != 0.0 or ty != 0.0:
-                    air_control = False
-                    if ty != 0.0 and pitch_in != 0.0 and (ty > 0.0) == (pitch_in > 0.0):
-                        ty = 0.0  # flip cancel: pulling against the flip stops its pitch and frees air control
-                        air_control = True
-                    alpha[0] += C.FLIP_TORQUE_X * tx
-                    alpha[1] += C.FLIP_TORQUE_Y * ty
-            air_control = air_control and cs[i, CS_IS_AUTOFLIPPING] < 0.5
-            if air_control:
-                pitch_scale = 1.0
-                if cs[i, CS_HAS_FLIPPED] > 0.5 and flip_time < C.FLIP_TORQUE_TIME + C.FLIP_PITCHLOCK_EXTRA_TIME:
-                    pitch_scale = 0.0
-                up_p = pitch_in * pitch_scale
-                alpha[0] -= _AIR_TORQUE[2] * roll_in + _AIR_DAMPING[2] * wl[0]
-                alpha[1] -= _AIR_TORQUE[0] * up_p + _AIR_DAMPING[0] * wl[1] * (1.0 - abs(up_p))
-                alpha[2] += _AIR_TORQUE[1] * yaw_in - _AIR_DAMPING[1] * wl[2] * (1.0 - abs(yaw_in))
-            w += _mv(R, alpha) * dt
-            v += fwd * (C.THROTTLE_AIR_ACCEL * throttle * dt)
-
-        # ---- first jump: an impulse on the press, then a hold force for 0.025 to 0.2 s
-        if on_ground and cs[i, CS_IS_JUMPING] < 0.5:
-            if not (cs[i, CS_HAS_JUMPED] > 0.5
-                    and cs[i, CS_JUMP_TIME] < C.JUMP_MIN_TIME + C.JUMP_RESET_MIN_TIME):
-                cs[i, CS_HAS_JUMPED] = 0.0
-        if cs[i, CS_IS_JUMPING] > 0.5:
-            # 1e-6: after 24 ticks the float sum of 1/120 lands a hair under 0.2; the game stops at 24 ticks.
-            still = cs[i, CS_JUMP_TIME] < C.JUMP_MIN_TIME or (jump and cs[i, CS_JUMP_TIME] + 1e-6 < C.JUMP_MAX_TIME)
-            cs[i, CS_IS_JUMPING] = 1.0 if still else 0.0
-        elif on_ground and jump_pressed:
-            cs[i, CS_IS_JUMPING] = 1.0
-            cs[i, CS_JUMP_TIME] = 0.0
-            v += up * C.JUMP_IMMEDIATE_VEL
-        if cs[i, CS_IS_JUMPING] > 0.5:
-            cs[i, CS_HAS_JUMPED] = 1.0
-            accel = C.JUMP_ACCEL
-            if cs[i, CS_JUMP_TIME] < C.JUMP_MIN_TIME:
-                accel *= C.JUMP_PRE_MIN_ACCEL_SCALE
-            v += up * (accel * dt)
-            cs[i, CS_JUMP_TIME] += dt
-
-        # ---- auto-flip: jump while lying on the roof rights the car
-        if jump_pressed and cs[i, CS_BODY_CONTACT] > 0.5 and cs[i, CS_BODY_NORMAL_X + 2] > C.AUTOFLIP_NORM_Z_THRESH:
-            roll_angle = np.arctan2(-right[2], up[2])
-            if abs(roll_angle) > C.AUTOFLIP_ROLL_THRESH:
-                cs[i, CS_AUTOFLIP_TIMER] = C.AUTOFLIP_TIME * abs(roll_angle) / np.pi
-                cs[i, CS_AUTOFLIP_SCALE] = 1.0 if roll_angle > 0.0 else -1.0
-                cs[i, CS_IS_AUTOFLIPPING] = 1.0
-                v -= up * C.AUTOFLIP_IMPULSE
-        if cs[i, CS_IS_AUTOFLIPPING] > 0.5:
-            if cs[i, CS_AUTOFLIP_TIMER] <= 0.0:
-                cs[i, CS_IS_AUTOFLIPPING] = 0.0
-                cs[i, CS_AUTOFLIP_TIMER] = 0.0
-            else:
-                w += fwd * (C.AUTOFLIP_TORQUE * cs[i, CS_AUTOFLIP_SCALE] * dt)
-                cs[i, CS_AUTOFLIP_TIMER] -= dt
-
-        # ---- double jump or flip
-        if on_ground:
-            cs[i, CS_HAS_DOUBLE_JUMPED] = 0.0
-            cs[i, CS_HAS_FLIPPED] = 0.0
-            cs[i, CS_IS_FLIPPING] = 0.0
-            cs[i, CS_AIR_TIME_SINCE_JUMP] = 0.0
-        else:
-            if cs[i, CS_HAS_JUMPED] > 0.5 and cs[i, CS_IS_JUMPING] < 0.5:
-                cs[i, CS_AIR_TIME_SINCE_JUMP] += dt
-            else:
-                cs[i, CS_AIR_TIME_SINCE_JUMP] = 0.0
-            if (jump_pressed and cs[i, CS_AIR_TIME_SINCE_JUMP] < C.DOUBLEJUMP_MAX_DELAY
-                    and cs[i, CS_HAS_DOUBLE_JUMPED] < 0.5 and cs[i, CS_HAS_FLIPPED] < 0.5
-                    and cs[i, CS_IS_AUTOFLIPPING] < 0.5):
-                if max(abs(yaw_in), abs(pitch_in), abs(roll_in)) >= C.DODGE_DEADZONE:
-                    _start_flip(i, cs, v, fwd, v_fwd, pitch_in, yaw_in, roll_in)
-                else:
-                    v += up * C.JUMP_IMMEDIATE_VEL
-                    cs[i, CS_HAS_DOUBLE_JUMPED] = 1.0
-        if cs[i, CS_HAS_FLIPPED] > 0.5:
-            cs[i, CS_FLIP_TIME] += dt
-            ft = cs[i, CS_FLIP_TIME]
-            cs[i, CS_IS_FLIPPING] = 1.0 if ft <= C.FLIP_TORQUE_TIME else 0.0
-            if ft <= C.FLIP_TORQUE_TIME and ft >= C.FLIP_Z_DAMP_START and (v[2] < 0.0 or ft < C.FLIP_Z_DAMP_END):
-                v[2] *= (1.0 - C.FLIP_Z_DAMP_120) ** (dt * 120.0)
-
-        # ---- auto-roll: driving with some wheels (or the body) on a surface turns the car onto it
-        body_contact = cs[i, CS_BODY_CONTACT] > 0.5
-        if throttle != 0.0 and ((0 < num_contact < 4) or body_contact):
-            if num_contact > 0:
-                g_up = np.zeros(3)
-                for k in range(4):
-                    if hit[k]:
-                        g_up += hit_n[k]
-                g_up /= np.sqrt(_dot(g_up, g_up))
-            else:
-                g_up = cs[i, CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3].copy()
-            cross_right = _cross(g_up, fwd)
-            cross_fwd = _cross(-g_up, cross_right)
-            right_factor = 1.0 - min(max(_dot(right, cross_right), 0.0), 1.0)
-            fwd_factor = 1.0 - min(max(_dot(fwd, cross_fwd), 0.0), 1.0)
-            torque_right = fwd * (-1.0 if _dot(right, g_up) >= 0.0 else 1.0) * right_factor
-            torque_fwd = right * (1.0 if _dot(fwd, g_up) >= 0.0 else -1.0) * fwd_factor
-            v -= g_up * (C.AUTOROLL_FORCE * dt)
-            w += (torque_fwd + torque_right) * (C.AUTOROLL_TORQUE * dt)
-        cs[i, CS_BODY_CONTACT] = 0.0
-
-        # ---- the wheel impulses computed at the start of the tick
-        for k in range(4):
-            if hit[k]:
-                for j in range(3):
-                    rel[j] = hard[k, j] + down[j] * hit_t[k] - p[j]
-                _apply_impulse(R, inv_i, v, w, rel, susp_impulse[k])
-        for k in range(4):
-            if hit[k]:
-                _apply_impulse(R, inv_i, v, w, fric_rel[k], fric_impulse[k])
-
-        # ---- boost: once started it lasts at least 0.1 s
-        t_boost = cs[i, CS_BOOSTING_TIME]
-        if t_boost > 0.0:
-            t_boost = 0.0 if (not boost_btn and t_boost >= C.BOOST_MIN_TIME) else t_boost + dt
-        elif boost_btn:
-            t_boost = dt
-        cs[i, CS_BOOSTING_TIME] = t_boost
-        boosting = cs[i, CS_BOOST] > 0.0 and t_boost > 0.0
-        if boosting:
-            cs[i, CS_BOOST] = max(cs[i, CS_BOOST] - C.BOOST_USED_PER_SECOND * dt, 0.0)
-            v += fwd * ((C.BOOST_ACCEL_GROUND if on_ground else C.BOOST_ACCEL_AIR) * dt)
-        cs[i, CS_IS_BOOSTING] = 1.0 if boosting else 0.0
-
-        cs[i, CS_LAST_JUMP] = 1.0 if jump else 0.0
+            _update_air_torque(R, frame, c, car, v, w, dt)
+        _update_jump(on_ground, jump, jump_pressed, up, m, car, v, dt)
+        _update_auto_flip(jump_pressed, frame, car, v, w, dt)
+        _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, car, v, dt)
+        if c[0] != 0.0 and ((0 < num_contact < 4) or car[CS_BODY_CONTACT] > 0.5):
+            _update_auto_roll(frame, num_contact, wheels, car, v, w, dt)
+        car[CS_BODY_CONTACT] = 0.0
+        _apply_wheel_impulses(p, R, down, inv_inertia[i], wheels, susp_impulse, fric_impulse, fric_rel, v, w,
+                              scratch)
+        _update_boost(c[6] > 0.5, on_ground, fwd, m, car, v, dt)
+        car[CS_LAST_JUMP] = 1.0 if jump else 0.0
         vel[i] = v
         ang_vel[i] = w
     return n_unwritable
 
 
+@njit(cache=True, inline="always")
+def _cast_wheel_rays(p, R, down, conn, ray_len, ball_pos, ball_radius, wheels, car, scratch):
+    """Each wheel's ray from its hard point along car-down, against the arena (analytically) and this arena's
+    ball; records the contacts in ``car``. Returns (wheels in contact, wheels on the arena)."""
+    hit, hit_world, dist, normal, hard = wheels
+    rel = scratch.rel
+    hit[:] = False
+    hit_world[:] = False
+    dist[:] = 0.0
+    normal[:] = 0.0
+    hard[:] = 0.0
+    for k in range(4):
+        c = conn[k]
+        hp = hard[k]
+        for j in range(3):
+            hp[j] = p[j] + (R[j, 0] * c[0] + R[j, 1] * c[1] + R[j, 2] * c[2])
+        ok, t, nx, ny, nz = arena_raycast(hp[0], hp[1], hp[2], down[0], down[1], down[2], ray_len[k])
+        tb = _ray_sphere(hp, down, ball_pos, ball_radius)
+        if tb >= 0.0 and tb <= ray_len[k] and (not ok or tb < t):
+            for j in range(3):
+                rel[j] = hp[j] + down[j] * tb - ball_pos[j]
+            norm = np.sqrt(vdot(rel, rel))
+            for j in range(3):
+                normal[k, j] = rel[j] / norm
+            dist[k] = tb
+            hit[k] = True
+        elif ok:
+            normal[k, 0], normal[k, 1], normal[k, 2] = nx, ny, nz
+            dist[k] = t
+            hit[k] = True
+            hit_world[k] = True
+    num_contact = 0
+    num_world = 0
+    for k in range(4):
+        car[CS_WHEEL_0 + k] = 1.0 if hit[k] else 0.0
+        num_contact += hit[k]
+        num_world += hit_world[k]
+    car[CS_NUM_WHEELS] = num_contact
+    car[CS_ON_GROUND] = 1.0 if num_contact >= C.WHEELS_FOR_ON_GROUND else 0.0
+    car[CS_WORLD_CONTACT] = 1.0 if num_world > 0 else 0.0
+    return num_contact, num_world
+
+
+@njit(cache=True, inline="always")
+def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, ray_len, is_front, wheels, susp_impulse,
+                         scratch, dt):
+    """btVehicleRL's suspension from the start-of-tick velocity: a spring-damper that never pulls, plus the hard
+    stop, an inelastic push-back once a wheel nears the end of its short soft travel."""
+    hit, _, dist, normal, hard = wheels
+    rel, v_cp, cross, _, _ = scratch
+    susp_impulse[:] = 0.0
+    for k in range(4):
+        if not hit[k]:
+            continue
+        n = normal[k]
+        _contact_point_velocity(hard[k], down, dist[k], p, v0, w0, rel, cross, v_cp)
+        rest = rest_len[k]
+        susp_len = min(max(dist[k] - radius[k], rest - C.SUSPENSION_MAX_TRAVEL), rest + C.SUSPENSION_MAX_TRAVEL)
+        n_up = -vdot(n, down)  # how squarely the surface faces the suspension
+        if n_up > 0.1:
+            clipped_inv = 1.0 / n_up
+            rel_vel = vdot(n, v_cp) * clipped_inv
+        else:  # a surface almost along the suspension: btVehicleRL's clip (RocketSim)
+            rel_vel = 0.0
+            clipped_inv = 10.0
+        scale = C.SUSPENSION_FORCE_SCALE_FRONT if is_front[k] else C.SUSPENSION_FORCE_SCALE_BACK
+        damping = C.SUSPENSION_DAMP_COMPRESSION if rel_vel < 0.0 else C.SUSPENSION_DAMP_RELAXATION
+        force = (C.SUSPENSION_STIFFNESS * (rest - susp_len) * clipped_inv - damping * rel_vel) * scale
+        if force <= 0.0:
+            continue  # the suspension never pulls
+        gap = dist[k] - (ray_len[k] - radius[k])
+        m_eff = 1.0 / _inv_mass_along(R, inv_i, rel, n)
+        push = max(m_eff * (-0.2 * gap / dt - vdot(n, v_cp)), 0.0) * (1.0 / 1.5) / 4.0
+        amount = force * dt + push
+        for j in range(3):
+            susp_impulse[k, j] = n[j] * amount
+
+
+@njit(cache=True, inline="always")
+def _contact_point_velocity(hard_point, down, dist, p, v0, w0, rel, cross, v_cp):
+    """A wheel's contact point relative to the centre of mass (``rel``) and the start-of-tick velocity there."""
+    for j in range(3):
+        rel[j] = hard_point[j] + down[j] * dist - p[j]
+    vcross_into(w0, rel, cross)
+    for j in range(3):
+        v_cp[j] = v0[j] + cross[j]
+
+
+@njit(cache=True, inline="always")
+def _friction_impulses(p, R, frame, v0, w0, inv_i, is_front, wheels, car, fric_impulse, fric_rel, scratch, dt):
+    """btVehicleRL's tyre impulses from the start-of-tick velocity with LAST tick's steering angle, engine, brake
+    and friction factors (Bullet's vehicle applies a wheel set-up one tick late)."""
+    fwd, right, up, down = frame
+    hit, _, dist, normal, hard = wheels
+    rel, v_cp, cross, axle, f_dir = scratch
+    fric_impulse[:] = 0.0
+    fric_rel[:] = 0.0
+    last_angle = car[CS_STEER_ANGLE]
+    cos_l, sin_l = np.cos(last_angle), np.sin(last_angle)
+    for k in range(4):
+        if not hit[k]:
+            continue
+        n = normal[k]
+        _contact_point_velocity(hard[k], down, dist[k], p, v0, w0, rel, cross, v_cp)
+        along_up = vdot(rel, up)
+        for j in range(3):  # applied in the centre-of-mass plane: no pitch from braking
+            fric_rel[k, j] = rel[j] - up[j] * along_up
+        _wheel_axle(is_front[k], fwd, right, cos_l, sin_l, axle)
+        along_n = vdot(axle, n)
+        for j in range(3):
+            axle[j] = axle[j] - n[j] * along_n
+        a_len = np.sqrt(vdot(axle, axle))
+        if a_len < 1e-9:
+            continue
+        for j in range(3):
+            axle[j] /= a_len
+        vcross_into(axle, n, f_dir)
+        m_lat = 1.0 / _inv_mass_along(R, inv_i, rel, axle)
+        side = -0.2 * vdot(v_cp, axle) * m_lat
+        engine = car[CS_ENGINE]
+        if engine != 0.0:
+            rolling = engine
+        elif car[CS_BRAKE] != 0.0:
+            b = car[CS_BRAKE]
+            rolling = min(max(-vdot(v_cp, f_dir) * C.BRAKE_SLIP_SCALE, -b), b)
+        else:
+            rolling = 0.0
+        long_amount = rolling * car[CS_LONG_FRICTION_0 + k]
+        lat_amount = side * car[CS_LAT_FRICTION_0 + k]
+        for j in range(3):
+            fric_impulse[k, j] = (f_dir[j] * long_amount + axle[j] * lat_amount) * (C.CAR_MASS / 3.0) * dt
+
+
+@njit(cache=True, inline="always")
+def _wheel_axle(is_front, fwd, right, cos_a, sin_a, out):
+    """A wheel's axle: the car's right, turned by the steering angle on the front wheels."""
+    if is_front:
+        for j in range(3):
+            out[j] = right[j] * cos_a - fwd[j] * sin_a
+    else:
+        out[:] = right
+
+
+@njit(cache=True, inline="always")
+def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_world, wheels, car, v, scratch, dt):
+    """RocketSim's ``_UpdateWheels``: this tick's handbrake, engine and brake, steering angle and tyre friction
+    factors (applied next tick), and the sticky force. Returns the forward speed at the start of the tick."""
+    fwd, right, _, _ = frame
+    hit, _, _, normal, hard = wheels
+    rel, v_cp, cross, axle, f_dir = scratch
+    throttle, steer, handbrake = c[0], c[1], c[7] > 0.5
+    hb = car[CS_HANDBRAKE]
+    hb = hb + C.POWERSLIDE_RISE_RATE * dt if handbrake else hb - C.POWERSLIDE_FALL_RATE * dt
+    hb = min(max(hb, 0.0), 1.0)
+    car[CS_HANDBRAKE] = hb
+    v_fwd = vdot(v0, fwd)
+    abs_v_fwd = abs(v_fwd)
+    real_throttle = 1.0 if (c[6] > 0.5 and car[CS_BOOST] > 0.0) else throttle
+    engine_throttle = real_throttle
+    brake = 0.0
+    if not handbrake:
+        if abs(real_throttle) >= C.THROTTLE_DEADZONE:
+            if abs_v_fwd > C.STOPPING_FORWARD_VEL and real_throttle * v_fwd < 0.0:
+                brake = 1.0
+                engine_throttle = 0.0
+        else:
+            engine_throttle = 0.0
+            brake = 1.0 if abs_v_fwd < C.STOPPING_FORWARD_VEL else C.COAST_BRAKE_FACTOR
+    drive_scale = interp(_THROTTLE_CURVE, abs_v_fwd)
+    if num_contact < 3:
+        drive_scale *= 0.25
+    # Per-wheel values in "impulse per (mass/3) per second", RocketSim's friction scale.
+    car[CS_ENGINE] = engine_throttle * C.THROTTLE_TORQUE_AMOUNT * 3.0 * drive_scale
+    car[CS_BRAKE] = brake * C.BRAKE_ACCEL / 4.0 * 3.0
+    angle = interp(_STEER_CURVE_3W if three_wheel else _STEER_CURVE, abs_v_fwd)
+    if hb > 0.0:
+        angle += (interp(_POWERSLIDE_CURVE, abs_v_fwd) - angle) * hb
+    # The axles below still turn by last tick's angle: friction factors are measured on the wheel as it is.
+    cos_l, sin_l = np.cos(car[CS_STEER_ANGLE]), np.sin(car[CS_STEER_ANGLE])
+    car[CS_STEER_ANGLE] = angle * steer
+    for k in range(4):
+        if not hit[k]:
+            continue
+        n = normal[k]
+        _wheel_axle(is_front[k], fwd, right, cos_l, sin_l, axle)
+        vcross_into(axle, n, f_dir)  # the wheel's rolling direction
+        for j in range(3):
+            rel[j] = hard[k, j] - p[j]
+        vcross_into(w0, rel, cross)
+        for j in range(3):
+            v_cp[j] = v0[j] + cross[j]  # the velocity at the wheel's hard point
+        lat_speed = abs(vdot(v_cp, axle))
+        slip = 0.0
+        if lat_speed > 5.0:
+            slip = lat_speed / (abs(vdot(v_cp, f_dir)) + lat_speed)
+        lat_fric = interp(_LAT_CURVE_3W if three_wheel else _LAT_CURVE, slip)
+        long_fric = 1.0
+        if hb > 0.0:
+            lat_fric *= (C.HANDBRAKE_LAT_FRICTION_FACTOR - 1.0) * hb + 1.0
+            long_fric *= (interp(_HB_LONG_CURVE, slip) - 1.0) * hb + 1.0
+        if real_throttle == 0.0:
+            non_sticky = interp(_NON_STICKY_CURVE, n[2])
+            lat_fric *= non_sticky
+            long_fric *= non_sticky
+        car[CS_LAT_FRICTION_0 + k] = lat_fric
+        car[CS_LONG_FRICTION_0 + k] = long_fric
+    if num_world > 0:
+        n_avg = _mean_normal(wheels)
+        sticky = 0.0 if three_wheel else C.STICKY_FORCE_GROUND
+        if real_throttle != 0.0 or abs_v_fwd > C.STOPPING_FORWARD_VEL:
+            sticky += C.STICKY_FORCE_FULL_STICK_EXTRA * (1.0 - abs(n_avg[2]))
+        v -= n_avg * (sticky * _GRAVITY * dt)
+    return v_fwd
+
+
+@njit(cache=True, inline="always")
+def _mean_normal(wheels):
+    """The normalised mean of the contact normals of the wheels in contact (btVehicleRL's upwards direction)."""
+    hit, _, _, normal, _ = wheels
+    n_avg = np.zeros(3)
+    for k in range(4):
+        if hit[k]:
+            n_avg += normal[k]
+    n_avg /= np.sqrt(vdot(n_avg, n_avg))
+    return n_avg
+
+
+@njit(cache=True, inline="always")
+def _update_air_torque(R, frame, c, car, v, w, dt):
+    """RocketSim's ``_UpdateAirTorque`` with no wheel down: the flip's torque (and its cancel) or air control
+    (pitch, yaw, roll with damping; pitch locked after a flip), and air throttle."""
+    pitch_in, yaw_in, roll_in = c[2], c[3], c[4]
+    wl = mat_t_vec(R, w)
+    alpha = np.zeros(3)
+    air_control = True
+    flip_time = car[CS_FLIP_TIME]
+    if car[CS_HAS_FLIPPED] > 0.5 and flip_time < C.FLIP_TORQUE_TIME:
+        tx = car[CS_FLIP_TORQUE_X]
+        ty = car[CS_FLIP_TORQUE_Y]
+        if tx != 0.0 or ty != 0.0:
+            air_control = False
+            if ty != 0.0 and pitch_in != 0.0 and (ty > 0.0) == (pitch_in > 0.0):
+                ty = 0.0  # flip cancel: pulling against the flip stops its pitch and frees air control
+                air_control = True
+            alpha[0] += C.FLIP_TORQUE_X * tx
+            alpha[1] += C.FLIP_TORQUE_Y * ty
+    air_control = air_control and car[CS_IS_AUTOFLIPPING] < 0.5
+    if air_control:
+        pitch_scale = 1.0
+        if car[CS_HAS_FLIPPED] > 0.5 and flip_time < C.FLIP_TORQUE_TIME + C.FLIP_PITCHLOCK_EXTRA_TIME:
+            pitch_scale = 0.0
+        up_p = pitch_in * pitch_scale
+        alpha[0] -= _AIR_TORQUE[2] * roll_in + _AIR_DAMPING[2] * wl[0]
+        alpha[1] -= _AIR_TORQUE[0] * up_p + _AIR_DAMPING[0] * wl[1] * (1.0 - abs(up_p))
+        alpha[2] += _AIR_TORQUE[1] * yaw_in - _AIR_DAMPING[1] * wl[2] * (1.0 - abs(yaw_in))
+    w += mat_vec(R, alpha) * dt
+    v += frame.fwd * (C.THROTTLE_AIR_ACCEL * c[0] * dt)
+
+
+@njit(cache=True, inline="always")
+def _update_jump(on_ground, jump, jump_pressed, up, m, car, v, dt):
+    """RocketSim's ``_UpdateJump``: an impulse on the press, then a hold force for 0.025 to 0.2 s."""
+    if on_ground and car[CS_IS_JUMPING] < 0.5:
+        if not (car[CS_HAS_JUMPED] > 0.5 and car[CS_JUMP_TIME] < C.JUMP_MIN_TIME + C.JUMP_RESET_MIN_TIME):
+            car[CS_HAS_JUMPED] = 0.0
+    if car[CS_IS_JUMPING] > 0.5:
+        # 1e-6: after 24 ticks the float sum of 1/120 lands a hair under 0.2; the game stops at 24 ticks.
+        still = car[CS_JUMP_TIME] < C.JUMP_MIN_TIME or (jump and car[CS_JUMP_TIME] + 1e-6 < C.JUMP_MAX_TIME)
+        car[CS_IS_JUMPING] = 1.0 if still else 0.0
+    elif on_ground and jump_pressed:
+        car[CS_IS_JUMPING] = 1.0
+        car[CS_JUMP_TIME] = 0.0
+        v += up * m[MUT_JUMP_IMMEDIATE_VEL]
+    if car[CS_IS_JUMPING] > 0.5:
+        car[CS_HAS_JUMPED] = 1.0
+        accel = m[MUT_JUMP_ACCEL]
+        if car[CS_JUMP_TIME] < C.JUMP_MIN_TIME:
+            accel *= C.JUMP_PRE_MIN_ACCEL_SCALE
+        v += up * (accel * dt)
+        car[CS_JUMP_TIME] += dt
+
+
+@njit(cache=True, inline="always")
+def _update_auto_flip(jump_pressed, frame, car, v, w, dt):
+    """RocketSim's ``_UpdateAutoFlip``: jump while lying on the roof rights the car."""
+    fwd, right, up, _ = frame
+    if jump_pressed and car[CS_BODY_CONTACT] > 0.5 and car[CS_BODY_NORMAL_X + 2] > C.AUTOFLIP_NORM_Z_THRESH:
+        roll_angle = np.arctan2(-right[2], up[2])
+        if abs(roll_angle) > C.AUTOFLIP_ROLL_THRESH:
+            car[CS_AUTOFLIP_TIMER] = C.AUTOFLIP_TIME * abs(roll_angle) / np.pi
+            car[CS_AUTOFLIP_SCALE] = 1.0 if roll_angle > 0.0 else -1.0
+            car[CS_IS_AUTOFLIPPING] = 1.0
+            v -= up * C.AUTOFLIP_IMPULSE
+    if car[CS_IS_AUTOFLIPPING] > 0.5:
+        if car[CS_AUTOFLIP_TIMER] <= 0.0:
+            car[CS_IS_AUTOFLIPPING] = 0.0
+            car[CS_AUTOFLIP_TIMER] = 0.0
+        else:
+            w += fwd * (C.AUTOFLIP_TORQUE * car[CS_AUTOFLIP_SCALE] * dt)
+            car[CS_AUTOFLIP_TIMER] -= dt
+
+
+@njit(cache=True, inline="always")
+def _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, car, v, dt):
+    """RocketSim's ``_UpdateDoubleJumpOrFlip``: landing restores both; in the air a new press within 1.25 s of
+    the jump is a flip (past the dodge deadzone) or a double jump; a flip's Z-damping."""
+    pitch_in, yaw_in, roll_in = c[2], c[3], c[4]
+    if on_ground:
+        car[CS_HAS_DOUBLE_JUMPED] = 0.0
+        car[CS_HAS_FLIPPED] = 0.0
+        car[CS_IS_FLIPPING] = 0.0
+        car[CS_AIR_TIME_SINCE_JUMP] = 0.0
+    else:
+        if car[CS_HAS_JUMPED] > 0.5 and car[CS_IS_JUMPING] < 0.5:
+            car[CS_AIR_TIME_SINCE_JUMP] += dt
+        else:
+            car[CS_AIR_TIME_SINCE_JUMP] = 0.0
+        if jump_pressed and car[CS_AIR_TIME_SINCE_JUMP] < C.DOUBLEJUMP_MAX_DELAY \
+                and car[CS_IS_AUTOFLIPPING] < 0.5:
+            unused = car[CS_HAS_DOUBLE_JUMPED] < 0.5 and car[CS_HAS_FLIPPED] < 0.5
+            if max(abs(yaw_in), abs(pitch_in), abs(roll_in)) >= m[MUT_DODGE_DEADZONE]:
+                if unused or m[MUT_UNLIMITED_FLIPS] != 0.0:
+                    _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in)
+            elif unused or m[MUT_UNLIMITED_DOUBLE_JUMPS] != 0.0:
+                v += up * C.JUMP_IMMEDIATE_VEL  # RocketSim's double jump ignores the mutator's jump impulse
+                car[CS_HAS_DOUBLE_JUMPED] = 1.0
+    if car[CS_HAS_FLIPPED] > 0.5:
+        car[CS_FLIP_TIME] += dt
+        ft = car[CS_FLIP_TIME]
+        car[CS_IS_FLIPPING] = 1.0 if ft <= C.FLIP_TORQUE_TIME else 0.0
+        if ft <= C.FLIP_TORQUE_TIME and ft >= C.FLIP_Z_DAMP_START and (v[2] < 0.0 or ft < C.FLIP_Z_DAMP_END):
+            v[2] *= (1.0 - C.FLIP_Z_DAMP_120) ** (dt * 120.0)
+
+
+@njit(cache=True, inline="always")
+def _update_auto_roll(frame, num_contact, wheels, car, v, w, dt):
+    """RocketSim's ``_UpdateAutoRoll``: driving with some wheels (or the body) on a surface turns the car onto it."""
+    fwd, right, _, _ = frame
+    if num_contact > 0:
+        g_up = _mean_normal(wheels)
+    else:
+        g_up = car[CS_BODY_NORMAL_X:CS_BODY_NORMAL_X + 3].copy()
+    cross_right = vcross(g_up, fwd)
+    cross_fwd = vcross(-g_up, cross_right)
+    right_factor = 1.0 - min(max(vdot(right, cross_right), 0.0), 1.0)
+    fwd_factor = 1.0 - min(max(vdot(fwd, cross_fwd), 0.0), 1.0)
+    torque_right = fwd * (-1.0 if vdot(right, g_up) >= 0.0 else 1.0) * right_factor
+    torque_fwd = right * (1.0 if vdot(fwd, g_up) >= 0.0 else -1.0) * fwd_factor
+    v -= g_up * (C.AUTOROLL_FORCE * dt)
+    w += (torque_fwd + torque_right) * (C.AUTOROLL_TORQUE * dt)
+
+
+@njit(cache=True, inline="always")
+def _apply_wheel_impulses(p, R, down, inv_i, wheels, susp_impulse, fric_impulse, fric_rel, v, w, scratch):
+    """The vehicle's second half: the suspension impulses at the contact points, then the tyre impulses."""
+    hit, _, dist, _, hard = wheels
+    rel = scratch.rel
+    for k in range(4):
+        if hit[k]:
+            for j in range(3):
+                rel[j] = hard[k, j] + down[j] * dist[k] - p[j]
+            _apply_impulse(R, inv_i, v, w, rel, susp_impulse[k])
+    for k in range(4):
+        if hit[k]:
+            _apply_impulse(R, inv_i, v, w, fric_rel[k], fric_impulse[k])
+
+
+@njit(cache=True, inline="always")
+def _update_boost(boost_btn, on_ground, fwd, m, car, v, dt):
+    """RocketSim's ``_UpdateBoost``: once started, boosting lasts at least 0.1 s while boost remains."""
+    t_boost = car[CS_BOOSTING_TIME]
+    if t_boost > 0.0:
+        t_boost = 0.0 if (not boost_btn and t_boost >= C.BOOST_MIN_TIME) else t_boost + dt
+    elif boost_btn:
+        t_boost = dt
+    car[CS_BOOSTING_TIME] = t_boost
+    boosting = car[CS_BOOST] > 0.0 and t_boost > 0.0
+    if boosting:
+        car[CS_BOOST] = max(car[CS_BOOST] - m[MUT_BOOST_USED_PER_SECOND] * dt, 0.0)
+        v += fwd * ((m[MUT_BOOST_ACCEL_GROUND] if on_ground else m[MUT_BOOST_ACCEL_AIR]) * dt)
+    car[CS_IS_BOOSTING] = 1.0 if boosting else 0.0
+
+
 @njit(cache=True)
-def _start_flip(i, cs, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
-    cs[i, CS_HAS_FLIPPED] = 1.0
-    cs[i, CS_IS_FLIPPING] = 1.0
-    cs[i, CS_FLIP_TIME] = 0.0
+def _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
+    """A dodge: its direction and torque from the stick, its impulse in the horizontal plane (RocketSim)."""
+    car[CS_HAS_FLIPPED] = 1.0
+    car[CS_IS_FLIPPING] = 1.0
+    car[CS_FLIP_TIME] = 0.0
     dx, dy = -pitch_in, yaw_in + roll_in
     if abs(dx) < 0.1 and abs(dy) < 0.1:  # a stall: no impulse, no torque, air control stays on
-        cs[i, CS_FLIP_TORQUE_X] = 0.0
-        cs[i, CS_FLIP_TORQUE_Y] = 0.0
+        car[CS_FLIP_TORQUE_X] = 0.0
+        car[CS_FLIP_TORQUE_Y] = 0.0
         return
     norm = np.sqrt(dx * dx + dy * dy)
     dx /= norm
     dy /= norm
-    cs[i, CS_FLIP_TORQUE_X] = -dy
-    cs[i, CS_FLIP_TORQUE_Y] = dx
+    car[CS_FLIP_TORQUE_X] = -dy
+    car[CS_FLIP_TORQUE_Y] = dx
     if abs(dx) < 0.1:
         dx = 0.0
     if abs(dy) < 0.1:
@@ -569,7 +646,7 @@ def _start_flip(i, cs, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
         imp_x *= 1.0 + (C.FLIP_FORWARD_IMPULSE_MAX_SPEED_SCALE - 1.0) * speed_ratio
     imp_y *= 1.0 + (C.FLIP_SIDE_IMPULSE_MAX_SPEED_SCALE - 1.0) * speed_ratio
     fh = np.array([fwd[0], fwd[1], 0.0])
-    fh_len = np.sqrt(_dot(fh, fh))
+    fh_len = np.sqrt(vdot(fh, fh))
     if fh_len < 1e-9:
         return
     fh /= fh_len
@@ -592,11 +669,11 @@ def car_post_tick(vel, ang_vel, active, cs, dt):
             if cs[i, CS_DEMO_TIMER] <= 0.0:
                 respawn_due += 1
             continue
-        speed = np.sqrt(_dot(vel[i], vel[i]))
+        speed = np.sqrt(vdot(vel[i], vel[i]))
         if speed > C.CAR_MAX_SPEED:
             vel[i] *= C.CAR_MAX_SPEED / speed
             speed = C.CAR_MAX_SPEED
-        ang = np.sqrt(_dot(ang_vel[i], ang_vel[i]))
+        ang = np.sqrt(vdot(ang_vel[i], ang_vel[i]))
         if ang > C.CAR_MAX_ANG_SPEED:
             ang_vel[i] *= C.CAR_MAX_ANG_SPEED / ang
         if cs[i, CS_IS_SUPERSONIC] > 0.5 and cs[i, CS_SUPERSONIC_TIME] < C.SUPERSONIC_MAINTAIN_MAX_TIME:
@@ -612,21 +689,25 @@ def car_post_tick(vel, ang_vel, active, cs, dt):
 
 
 @njit(cache=True)
-def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_timer, picked, dt):
-    """Count pad cooldowns down and let cars pick up active pads; ``picked[i]`` gets the pad index or -1.
+def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_timer, picked, gained, mut, dt):
+    """Count pad cooldowns down and let cars pick up active pads, in the arenas with pads on (``mut``);
+    ``picked[i]`` gets the pad index or -1 and ``gained[i]`` the boost it added.
 
     Returns the number of pickups this tick.
     """
     n_picked = 0
     for a in range(pad_timer.shape[0]):
+        if mut[a, MUT_BOOST_PADS] == 0.0:
+            continue
         for k in range(pad_timer.shape[1]):
             if pad_timer[a, k] > 0.0:
                 pad_timer[a, k] = max(pad_timer[a, k] - dt, 0.0)
     for i in range(car_pos.shape[0]):
         picked[i] = -1
-        if not active[i] or cs[i, CS_IS_DEMOED] > 0.5 or cs[i, CS_BOOST] >= C.BOOST_MAX:
-            continue
         a = car_arena[i]
+        if (not active[i] or cs[i, CS_IS_DEMOED] > 0.5 or cs[i, CS_BOOST] >= C.BOOST_MAX
+                or mut[a, MUT_BOOST_PADS] == 0.0):
+            continue
         for k in range(pad_pos.shape[0]):
             if pad_timer[a, k] > 0.0:
                 continue
@@ -635,8 +716,10 @@ def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_time
             dy = car_pos[i, 1] - pad_pos[k, 1]
             if dx * dx + dy * dy < radius * radius and abs(car_pos[i, 2] - pad_pos[k, 2]) < C.BOOST_PAD_MAX_Z_DIFF:
                 amount = C.BOOST_PAD_BIG_AMOUNT if pad_is_big[k] else C.BOOST_PAD_SMALL_AMOUNT
-                cs[i, CS_BOOST] = min(cs[i, CS_BOOST] + amount, C.BOOST_MAX)
-                pad_timer[a, k] = C.BOOST_PAD_BIG_COOLDOWN if pad_is_big[k] else C.BOOST_PAD_SMALL_COOLDOWN
+                before = cs[i, CS_BOOST]
+                cs[i, CS_BOOST] = min(before + amount, C.BOOST_MAX)
+                gained[i] = cs[i, CS_BOOST] - before
+                pad_timer[a, k] = mut[a, MUT_PAD_COOLDOWN_BIG] if pad_is_big[k] else mut[a, MUT_PAD_COOLDOWN_SMALL]
                 picked[i] = k
                 n_picked += 1
                 break

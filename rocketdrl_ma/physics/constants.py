@@ -78,10 +78,12 @@ THROTTLE_DEADZONE = 0.001
 THROTTLE_AIR_ACCEL = 200.0 / 3.0
 STEER_ANGLE_CURVE = ((0.0, 0.53356), (500.0, 0.31930), (1000.0, 0.18203), (1500.0, 0.10570),
                      (1750.0, 0.08507), (3000.0, 0.03454))
+STEER_ANGLE_CURVE_THREE_WHEEL = ((0.0, 0.342473), (2300.0, 0.034837))
 POWERSLIDE_STEER_ANGLE_CURVE = ((0.0, 0.39235), (2500.0, 0.12610))
 POWERSLIDE_RISE_RATE = 5.0
 POWERSLIDE_FALL_RATE = 2.0
 LAT_FRICTION_CURVE = ((0.0, 1.0), (1.0, 0.2))
+LAT_FRICTION_CURVE_THREE_WHEEL = ((0.0, 0.30), (1.0, 0.25))
 HANDBRAKE_LAT_FRICTION_FACTOR = 0.1
 HANDBRAKE_LONG_FRICTION_CURVE = ((0.0, 0.5), (1.0, 0.9))
 NON_STICKY_FRICTION_CURVE = ((0.0, 0.1), (0.7075, 0.5), (1.0, 1.0))
@@ -151,30 +153,23 @@ BOOST_PAD_BIG_RADIUS = 208.0
 BOOST_PAD_MAX_Z_DIFF = 95.0
 BOOST_PAD_SMALL_Z = 70.0
 BOOST_PAD_BIG_Z = 73.0
-_BIG_PADS_XY = [(sx * 3584.0, 0.0) for sx in (-1, 1)] + [
-    (sx * 3072.0, sy * 4096.0) for sx in (-1, 1) for sy in (-1, 1)]
-_SMALL_PADS_XY_ABS = [(0, 4240), (1792, 4184), (940, 3308), (0, 2816), (3584, 2484), (1788, 2300),
-                      (2048, 1036), (0, 1024), (1024, 0)]
-
-
-def _mirror_all(points_abs: list[tuple[float, float]]) -> list[tuple[float, float]]:
-    """Every sign combination of each (|x|, |y|), without duplicating zero coordinates."""
-    out: list[tuple[float, float]] = []
-    for ax, ay in points_abs:
-        for sx in ((1,) if ax == 0 else (-1, 1)):
-            for sy in ((1,) if ay == 0 else (-1, 1)):
-                out.append((float(sx * ax), float(sy * ay)))
-    return out
-
-
-def _pad_table() -> tuple[np.ndarray, np.ndarray]:
-    pads = [(x, y, BOOST_PAD_BIG_Z, True) for x, y in _BIG_PADS_XY]
-    pads += [(x, y, BOOST_PAD_SMALL_Z, False) for x, y in _mirror_all(_SMALL_PADS_XY_ABS)]
-    pads.sort(key=lambda p: (p[1], p[0]))  # RLBot's order: ascending y, then ascending x
-    return (np.array([p[:3] for p in pads], dtype=np.float64), np.array([p[3] for p in pads], dtype=bool))
-
-
-BOOST_PAD_POSITIONS, BOOST_PAD_IS_BIG = _pad_table()  # (34, 3) uu, (34,) bool
+# The 34 soccar pads (x, y, is_big) in the order of RocketSim's ``Arena.get_boost_pads()`` and RLGym's
+# ``BOOST_LOCATIONS``: rows of pads from the blue back wall to the orange one, each row from -x to +x. (A row
+# is not one y: (0, +-1024) sits in the row of (+-2048, +-1036), which a plain sort by y would break.)
+_PADS = ((0.0, -4240.0, False), (-1792.0, -4184.0, False), (1792.0, -4184.0, False),
+         (-3072.0, -4096.0, True), (3072.0, -4096.0, True),
+         (-940.0, -3308.0, False), (940.0, -3308.0, False), (0.0, -2816.0, False),
+         (-3584.0, -2484.0, False), (3584.0, -2484.0, False), (-1788.0, -2300.0, False), (1788.0, -2300.0, False),
+         (-2048.0, -1036.0, False), (0.0, -1024.0, False), (2048.0, -1036.0, False),
+         (-3584.0, 0.0, True), (-1024.0, 0.0, False), (1024.0, 0.0, False), (3584.0, 0.0, True),
+         (-2048.0, 1036.0, False), (0.0, 1024.0, False), (2048.0, 1036.0, False),
+         (-1788.0, 2300.0, False), (1788.0, 2300.0, False), (-3584.0, 2484.0, False), (3584.0, 2484.0, False),
+         (0.0, 2816.0, False), (-940.0, 3308.0, False), (940.0, 3308.0, False),
+         (-3072.0, 4096.0, True), (3072.0, 4096.0, True),
+         (-1792.0, 4184.0, False), (1792.0, 4184.0, False), (0.0, 4240.0, False))
+BOOST_PAD_IS_BIG = np.array([big for _, _, big in _PADS], dtype=bool)  # (34,)
+BOOST_PAD_POSITIONS = np.array([(x, y, BOOST_PAD_BIG_Z if big else BOOST_PAD_SMALL_Z)
+                                for x, y, big in _PADS], dtype=np.float64)  # (34, 3) uu
 
 # ---------------------------------------------------------------- kickoff and respawn (blue side)
 KICKOFF_SPOTS_BLUE = ((-2048.0, -2560.0, math.pi / 4), (2048.0, -2560.0, 3 * math.pi / 4),

@@ -125,3 +125,61 @@ class CarState:
             setattr(self, name, v)
         if self.handbrake_value > 1.0:
             raise ValueError(f"handbrake_value: must be in [0, 1], got {self.handbrake_value!r}")
+
+
+@dataclass(frozen=True)
+class CarExtraState:
+    """The rest of what RocketSim's ``CarState`` carries: the car model's memory of earlier ticks and its bump
+    cooldown, which ``CarState`` (our wire and replay format) leaves out. ``Car.set_state`` clears all of it, so a
+    state set on a used car plays on as on a new one; ``Car.set_extra_state`` afterwards restores it exactly."""
+    holding_jump: bool = False            # last tick's jump button: a held jump is not a new press
+    boost_active_time_s: float = 0.0      # how long the current boost has lasted (boosting lasts at least 0.1 s)
+    flip_torque: tuple[float, float, float] = (0.0, 0.0, 0.0)  # RocketSim's flip_rel_torque: (roll, pitch, 0)
+    is_auto_flipping: bool = False
+    auto_flip_timer_s: float = 0.0
+    auto_flip_direction: float = 0.0      # +1 or -1: which way the auto-flip rolls
+    car_contact_id: int | None = None     # the car this one last bumped or demolished (RocketSim's car_contact_id)
+    car_contact_cooldown_s: float = 0.0   # seconds until it may bump that car again
+
+    def __post_init__(self) -> None:
+        for name in ("boost_active_time_s", "auto_flip_timer_s", "car_contact_cooldown_s"):
+            v = float(getattr(self, name))
+            if not math.isfinite(v) or v < 0.0:
+                raise ValueError(f"{name}: must be a finite number >= 0, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, v)
+        torque = tuple(float(v) for v in self.flip_torque)
+        if len(torque) != 3 or not all(math.isfinite(v) for v in torque):
+            raise ValueError(f"flip_torque: expected 3 finite numbers, got {self.flip_torque!r}")
+        object.__setattr__(self, "flip_torque", torque)
+        if self.auto_flip_direction not in (-1.0, 0.0, 1.0):
+            raise ValueError(f"auto_flip_direction: must be -1, 0 or 1, got {self.auto_flip_direction!r}")
+        object.__setattr__(self, "auto_flip_direction", float(self.auto_flip_direction))
+        for name in ("holding_jump", "is_auto_flipping"):
+            object.__setattr__(self, name, bool(getattr(self, name)))
+
+
+@dataclass(frozen=True)
+class BallHitInfo:
+    """A car's last touch of the ball (RocketSim's ``BallHitInfo``); ``Car.get_ball_hit_info()`` is None before the
+    first. Positions and velocities in uu and uu/s, arena frame."""
+    tick: int                              # the tick of the last contact
+    extra_impulse_tick: int                # the last tick Rocket League's extra push was applied
+    relative_pos_on_ball: tuple[float, float, float]  # the contact point relative to the ball's centre
+    ball_pos: tuple[float, float, float]   # the ball's centre when it was touched
+    extra_hit_vel: tuple[float, float, float]  # the velocity the extra push added (zero on ticks without one)
+
+
+@dataclass(frozen=True)
+class BoostPadState:
+    """A pad's state: seconds until it is active again (0: active). RocketSim's ``BoostPadState.cooldown``."""
+    cooldown_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        v = float(self.cooldown_s)
+        if not math.isfinite(v) or v < 0.0:
+            raise ValueError(f"cooldown_s: must be a finite number >= 0, got {self.cooldown_s!r}")
+        object.__setattr__(self, "cooldown_s", v)
+
+    @property
+    def is_active(self) -> bool:
+        return self.cooldown_s == 0.0

@@ -12,7 +12,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from rocketdrl_ma.physics import Arena, Car, CarControls
+from rocketdrl_ma.physics import Arena, Car, CarControls, DemoMode, MutatorConfig, PhysicsEvent, PhysicsEventKind
 from rocketdrl_ma.physics import constants as C
 
 from .mutators import KickoffMutator, StateMutator
@@ -112,8 +112,8 @@ class Rules(ABC):
     # ------------------------------------------------------------------ machinery the env drives
     def build(self, seed: int | None = None) -> None:
         self.arena = Arena(seed=seed) if self.arena_factory is None else self.arena_factory(seed)
-        self.arena._batch.demos_enabled = self.demos
-        self.arena._batch.boost_pads_enabled = self.boost_pads
+        self.arena.set_mutator_config(MutatorConfig(demo_mode=DemoMode.NORMAL if self.demos else DemoMode.DISABLED,
+                                                    boost_pads=self.boost_pads))
         for agent in self.possible_agents:
             car = self.arena.add_car(team=agent_team(agent), preset=self.car_preset)
             self.cars[agent] = car
@@ -132,7 +132,7 @@ class Rules(ABC):
                 car.respawn()
         for mutator in self.spawn_mutators():
             mutator.apply(self.arena, self.cars, rng)
-        self.arena._batch.clear_events()
+        self.arena.clear_events()
         self.events = []
         self.last_touch = None
         self._touching = set()
@@ -144,13 +144,10 @@ class Rules(ABC):
 
         A vectorised env runs the same three steps itself around one ``ArenaBatch.step`` for all arenas."""
         self.begin_decision(controls)
-        batch = self.arena._batch
         for _ in range(ticks):
             self.apply_controls()
             self.arena.step(1)
-            physics_events = batch.events[:]
-            batch.clear_events()
-            self.end_tick(physics_events)
+            self.end_tick(self.arena.drain_events())
 
     def begin_decision(self, controls: dict[str, CarControls]) -> None:
         """Before a decision's ticks; a subclass clears its per-decision records here."""
@@ -158,7 +155,7 @@ class Rules(ABC):
         self.last_controls.update(controls)
         # The rows of validated CarControls, written straight into the batch each tick by one array assignment
         # (Car.set_controls per car and tick rebuilt and re-checked them 8 times per decision).
-        self._control_index = np.array([car._k for car in self.cars.values()], dtype=np.int64)
+        self._control_index = np.array([car.batch_row for car in self.cars.values()], dtype=np.int64)
         self._control_matrix = np.array([self.last_controls[agent].as_array() for agent in self.cars]).reshape(
             len(self.cars), len(_NEUTRAL_ROW))
         if len(self._neutral_matrix) != len(self.cars):
@@ -170,38 +167,36 @@ class Rules(ABC):
         frozen = self.controls_frozen()
         # Nothing else writes these rows during a decision, so they need writing only when they change.
         if frozen != self._applied_frozen:
-            self.arena._batch.controls[self._control_index] = self._neutral_matrix if frozen else self._control_matrix
+            self.arena.batch.controls[self._control_index] = self._neutral_matrix if frozen else self._control_matrix
             self._applied_frozen = frozen
 
-    def end_tick(self, physics_events: list[tuple]) -> None:
-        """After each tick: this arena's raw physics events (``ArenaBatch.events`` entries) become game events,
-        then the mode's per-tick logic runs."""
+    def end_tick(self, physics_events: list[PhysicsEvent]) -> None:
+        """After each tick: this arena's physics events (``Arena.drain_events()``) become game events, then the
+        mode's per-tick logic runs."""
         if physics_events or self._touching:  # otherwise there is nothing to collect and no contact to end
             self._collect_physics_events(physics_events)
         self.on_tick()
 
-    def _collect_physics_events(self, physics_events: list[tuple]) -> None:
-        """Turn the batch's raw events into game events. A touch is the start of a contact: a car resting
+    def _collect_physics_events(self, physics_events: list[PhysicsEvent]) -> None:
+        """Turn the arena's physics events into game events. A touch is the start of a contact: a car resting
         against the ball (a dribble) is in contact every tick, and that is one touch, not 120 a second."""
         touching = set()
+        agent_of = self._agent_by_car_id
         for event in physics_events:
-            tick, kind = event[0], event[1]
-            if kind == "ball_touch":
-                agent = self._agent_by_car_id[event[2]]
+            kind, tick = event.kind, event.tick
+            if kind is PhysicsEventKind.BALL_TOUCH:
+                agent = agent_of[event.car_id]
                 if agent not in touching:
                     touching.add(agent)
                     self.last_touch = agent
                     if agent not in self._touching:
                         self.events.append({"kind": "touch", "tick": tick, "agent": agent})
-            elif kind == "demo":
-                self.events.append({"kind": "demo", "tick": tick, "agent": self._agent_by_car_id[event[2]],
-                                    "victim": self._agent_by_car_id[event[3]]})
-            elif kind == "bump":
-                self.events.append({"kind": "bump", "tick": tick, "agent": self._agent_by_car_id[event[2]],
-                                    "victim": self._agent_by_car_id[event[3]]})
-            elif kind == "boost_pickup":
-                self.events.append({"kind": "boost_pickup", "tick": tick, "agent": self._agent_by_car_id[event[2]],
-                                    "pad": event[3]})
+            elif kind is PhysicsEventKind.DEMO or kind is PhysicsEventKind.BUMP:
+                self.events.append({"kind": kind.value, "tick": tick, "agent": agent_of[event.attacker_id],
+                                    "victim": agent_of[event.victim_id]})
+            elif kind is PhysicsEventKind.BOOST_PICKUP:
+                self.events.append({"kind": "boost_pickup", "tick": tick, "agent": agent_of[event.car_id],
+                                    "pad": event.pad_index})
         self._touching = touching
 
     def game_state(self) -> GameState:

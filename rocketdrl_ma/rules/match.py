@@ -71,9 +71,7 @@ class Match(Rules):
     def on_tick(self) -> None:
         dt = self.arena.tick_time
         # The ball's position and velocity as plain copies: a BallState per tick cost more than the rest of this.
-        batch, k = self.arena._batch, self.arena.index
-        batch._read_state()
-        ball_pos, ball_vel = batch.ball_pos[k].copy(), batch.ball_vel[k].copy()
+        ball_pos, ball_vel = self.arena.ball.get_pos(), self.arena.ball.get_vel()
         self._score_touch_events(ball_pos, ball_vel)
         if self.ended:
             return
@@ -138,7 +136,7 @@ class Match(Rules):
             self.ended = True
             return
         KickoffMutator().apply(self.arena, self.cars, self.rng)
-        self.arena._batch.clear_events()
+        self.arena.clear_events()
         self.last_touch = None
         self.countdown_s = self.kickoff_countdown_s
 

@@ -141,5 +141,8 @@ def test_boost_pad_pickup_and_respawn(arena):
 
 def test_boost_pads_are_the_standard_34():
     assert len(C.BOOST_PAD_POSITIONS) == 34 and C.BOOST_PAD_IS_BIG.sum() == 6
-    order = [(p[1], p[0]) for p in C.BOOST_PAD_POSITIONS]
-    assert order == sorted(order)
+    xy = {(float(x), float(y)) for x, y, _ in C.BOOST_PAD_POSITIONS}
+    assert len(xy) == 34 and all((-x, -y) in xy and (-x, y) in xy for x, y in xy)  # the field's symmetry
+    big = C.BOOST_PAD_POSITIONS[C.BOOST_PAD_IS_BIG]
+    assert sorted(map(tuple, np.abs(big[:, :2]).tolist())) == [(3072.0, 4096.0)] * 4 + [(3584.0, 0.0)] * 2
+    assert set(C.BOOST_PAD_POSITIONS[:, 2]) == {C.BOOST_PAD_SMALL_Z, C.BOOST_PAD_BIG_Z}

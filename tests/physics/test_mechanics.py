@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from rocketdrl_ma.physics import Arena, BallState, CarControls, CarState, yaw_rot_mat
+from rocketdrl_ma.physics import Arena, BallState, Bump, CarControls, CarState, Demo, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 
 AWAY_BALL = BallState(pos=np.array([2500.0, 3000.0, C.BALL_REST_Z]))
@@ -107,7 +107,8 @@ def test_supersonic_car_demolishes_an_opponent_and_it_respawns(arena):
         if victim.get_state().is_demoed:
             break
     assert victim.get_state().is_demoed
-    assert any(e[1] == "demo" for e in arena._batch.events)
+    demos = [e for e in arena.drain_events() if isinstance(e, Demo)]
+    assert [(e.attacker_id, e.victim_id) for e in demos] == [(attacker.id, victim.id)]
     arena.step(int(C.DEMO_RESPAWN_TIME * 120) + 2)
     s = victim.get_state()
     assert not s.is_demoed
@@ -120,14 +121,18 @@ def test_slow_car_bumps_instead_of_demolishing(arena):
     attacker.set_state(_grounded(y=-1500.0, vel=np.array([0.0, 1400.0, 0.0])))
     victim.set_state(_grounded(y=-1250.0, yaw=0.0))
     attacker.set_controls(CarControls(throttle=1.0))
+    bumps = []
     for _ in range(40):
         arena.step(1)
-        if any(e[1] == "bump" for e in arena._batch.events):
+        bumps += [e for e in arena.drain_events() if isinstance(e, Bump)]
+        if bumps:
             break
     arena.step(1)
     assert not victim.get_state().is_demoed
     assert victim.get_state().vel[1] > 1100.0  # pushed along the attacker's direction (RocketSim: 1558)
-    assert any(e[1] == "bump" for e in arena._batch.events)
+    assert [(e.attacker_id, e.victim_id) for e in bumps] == [(attacker.id, victim.id)]
+    extra = attacker.get_extra_state()
+    assert extra.car_contact_id == victim.id and 0.0 < extra.car_contact_cooldown_s <= C.BUMP_COOLDOWN_TIME
 
 
 def test_car_drives_up_the_side_wall(arena):

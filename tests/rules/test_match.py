@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from rocketdrl_ma.physics import BallState, CarControls, CarState, yaw_rot_mat
+from rocketdrl_ma.physics import BallState, CarControls, CarState, DemoMode, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules import Match
 
@@ -119,7 +119,7 @@ def test_switching_off_boost_pads_and_demos():
     car.set_state(CarState(pos=np.array([pad[0], pad[1], 17.0]), boost=10.0))
     m.advance(_idle(m), 4)
     assert car.get_state().boost == pytest.approx(10.0)
-    assert not m.arena._batch.demos_enabled
+    assert m.arena.get_mutator_config().demo_mode == DemoMode.DISABLED
 
 
 def test_a_ball_resting_on_a_car_is_a_touch_per_landing_not_one_per_tick():

@@ -128,7 +128,9 @@ def test_static_box_bounces_the_ball_moves_and_goes_away():
     arena = Arena(seed=0)
     box = arena.add_static_box([0.0, 2000.0, 150.0], [400.0, 50.0, 150.0])
     ball = roll_ball_at(arena)
-    assert ball.pos[1] < 2000.0 - 50.0 - C.BALL_RADIUS + 1.0 and ball.vel[1] < -300.0  # bounced back
+    # Bounced back (and, rolling on the floor into the face, up: RocketSim merges the floor's and the face's
+    # contact into one, so the ball leaves the corner upwards)
+    assert ball.pos[1] < 2000.0 - 50.0 - C.BALL_RADIUS + 1.0 and ball.vel[1] < -50.0 and ball.vel[2] > 300.0
     arena.move_static_box(box, [0.0, 2000.0, 600.0])  # lifted: the rolling ball passes under
     assert roll_ball_at(arena).pos[1] > 2100.0
     arena.move_static_box(box, [0.0, 2000.0, -140.0])  # sunk to a 10 uu kerb: the ball bumps up over it
@@ -157,7 +159,7 @@ def test_static_box_stays_in_its_own_arena_of_a_batch():
         arena.ball.set_state(BallState(pos=np.array([0.0, 1000.0, C.BALL_RADIUS]), vel=np.array([0.0, 1500.0, 0.0])))
     batch.step(120)
     assert batch.arenas[0].ball.get_state().pos[1] > 2100.0  # no box in arena 0
-    assert batch.arenas[1].ball.get_state().vel[1] < -300.0
+    assert batch.arenas[1].ball.get_state().vel[1] < -50.0  # bounced back (and up) off its box
     batch.close()
 
 
@@ -311,7 +313,7 @@ def test_aerial_touch_then_goal_earns_five_then_ten():
 
 
 def test_a_scripted_double_jump_scores_the_aerial_with_the_seed_actions():
-    """Drive at the hanging ball at 600 uu/s, jump 650 uu before it (held 0.21 s), double-jump: the car meets
+    """Drive at the hanging ball at 600 uu/s, jump 750 uu before it (held 0.21 s), double-jump: the car meets
     the ball near its apex (~440 uu), which is an aerial touch, and knocks it in."""
     env = aerial_env()
     rules = env.unwrapped.rules
@@ -321,7 +323,7 @@ def test_a_scripted_double_jump_scores_the_aerial_with_the_seed_actions():
             break
         car, ball = rules.cars["blue_0"].get_state(), rules.arena.ball.get_state()
         action = np.array([1.0 if car.vel @ car.rot_mat[:, 0] < 600.0 else 0.0, 0.0, -1.0, -1.0, -1.0], np.float32)
-        if jump_step is None and np.linalg.norm((ball.pos - car.pos)[:2]) < 650.0:
+        if jump_step is None and np.linalg.norm((ball.pos - car.pos)[:2]) < 750.0:
             jump_step = step
         if jump_step is not None:
             action[2] = 1.0 if step - jump_step < 5 or step - jump_step == 6 else -1.0

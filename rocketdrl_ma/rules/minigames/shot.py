@@ -172,7 +172,7 @@ class ShotMinigame(Rules):
     def _next_round(self) -> None:
         for mutator in self.spawn_mutators():
             mutator.apply(self.arena, self.cars, self.rng)
-        self.arena._batch.clear_events()
+        self.arena.clear_events()
         self._begin_round()
 
     def begin_decision(self, controls) -> None:
