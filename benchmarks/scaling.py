@@ -60,7 +60,7 @@ else:  # collect: the rollout workers and the policy, no learning
     from rocketdrl_ma.policies.ppo.rollout_policy import RolloutPolicy
     from rocketdrl_ma.policies.ppo.trainer import Probe, sync_controls, worker_config
     from rocketdrl_ma.policies.ppo.workers import Rollouts, WorkerPlan
-    from rocketdrl_ma.policies.selfplay.pool import OpponentPool
+    from rocketdrl_ma.policies.ppo.selfplay.pool import OpponentPool
     torch.set_num_threads(1)
     cfg = validate_train_config(raw)
     wcfg = worker_config(cfg)

@@ -2,7 +2,7 @@
 
 ``play`` runs a full match of a config between scripted bots, headless, with a progress bar, and prints
 the final score and the events (``make demo`` runs a 1v1 with a one-minute clock). The other commands
-live next to the code they drive: each module in ``COMMAND_MODULES`` has ``add_commands(subparsers)``,
+live in ``rocketdrl_ma.commands``, one module per area: each in ``COMMAND_MODULES`` has ``add_commands(subparsers)``,
 which adds its subcommands with ``set_defaults(run=function)``; ``run(args)`` returns the exit code.
 Those modules must import only the standard library at their top, so ``--help`` stays fast.
 """
@@ -12,8 +12,8 @@ import argparse
 import importlib
 import sys
 
-COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.policies.commands", "rocketdrl_ma.server.commands",
-                                    "rocketdrl_ma.league.commands", "rocketdrl_ma.web.commands")
+COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.commands.training", "rocketdrl_ma.commands.server",
+                                    "rocketdrl_ma.commands.league", "rocketdrl_ma.commands.web")
 
 
 def play(config: str, blue: str, orange: str, video: str | None, seed: int, clock_s: float | None,
@@ -34,7 +34,7 @@ def play(config: str, blue: str, orange: str, video: str | None, seed: int, cloc
         shown = 0.0
         while env.agents:
             state = env.rules.game_state()
-            actions = {agent: env.action_parser.encode(bots[agent].act(agent, state)) for agent in env.agents}
+            actions = {agent: env.action_parser.encode(bots[agent].controls(agent, state)) for agent in env.agents}
             _, _, _, _, infos = env.step(actions)
             if video:
                 env.render()

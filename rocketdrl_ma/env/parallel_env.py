@@ -128,11 +128,12 @@ class RocketDRLParallelEnv(ParallelEnv):
         return observations, infos
 
     def step(self, actions: dict):
-        self.rules.advance(self._decision_controls(actions), self.tick_skip)
-        return self._end_decision()
+        self.rules.advance(self.decision_controls(actions), self.tick_skip)
+        return self.end_decision()
 
-    def _decision_controls(self, actions: dict) -> dict:
-        """Validated actions parsed into each live agent's controls (shared with VectorEnv)."""
+    def decision_controls(self, actions: dict) -> dict:
+        """The first half of ``step``: validated actions parsed into each live agent's controls. ``VectorEnv``
+        calls the two halves around one physics step of all its lanes' arenas."""
         if not self.agents:
             raise ValueError("step: the episode is over; call reset()")
         for agent in actions:
@@ -144,9 +145,10 @@ class RocketDRLParallelEnv(ParallelEnv):
         # Actions for agents no longer in the game are ignored (torchrl sends them for finished agents).
         return {agent: self.action_parser.parse(agent, actions[agent], self._state) for agent in self.agents}
 
-    def _end_decision(self, observe: bool = True):
-        """Everything a step returns, once the rules have run the decision's ticks (shared with VectorEnv, which
-        builds the observations of all its lanes at once when it can: ``observe=False`` leaves them out)."""
+    def end_decision(self, observe: bool = True):
+        """The second half of ``step``: everything a step returns, once the rules have run the decision's ticks
+        (``VectorEnv`` builds the observations of all its lanes at once when it can: ``observe=False`` leaves them
+        out)."""
         self._cycles += 1
         state = self._state = self.rules.game_state()
         terminated = self.rules.is_terminated()

@@ -98,7 +98,7 @@ class VectorEnv:
                              "call reset_arenas() for them")
         for k, lane in enumerate(self.lanes):
             row = actions[k]
-            controls = lane._decision_controls({agent: row[j] for j, agent in enumerate(self.possible_agents)})
+            controls = lane.decision_controls({agent: row[j] for j, agent in enumerate(self.possible_agents)})
             lane.rules.begin_decision(controls)
         self._run_ticks()
         rewards = np.zeros((self.n_arenas, self.n_agents), np.float32)
@@ -107,7 +107,7 @@ class VectorEnv:
         infos = []
         observe = self._batched_obs is None
         for k, lane in enumerate(self.lanes):
-            obs, rew, term, trunc, info = lane._end_decision(observe=observe)
+            obs, rew, term, trunc, info = lane.end_decision(observe=observe)
             for j, agent in enumerate(self.possible_agents):
                 if observe:
                     self._obs[k, j] = obs[agent]

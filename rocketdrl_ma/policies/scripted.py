@@ -7,13 +7,15 @@ learning agent with the full-state observation.
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
+from abc import abstractmethod
 
 import numpy as np
 
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, agent_team
+
+from .base import Policy
 
 ATTACK_GOAL = np.array([0.0, C.ARENA_EXTENT_Y + 200.0, 0.0])  # in the team frame: always +y
 OWN_GOAL = np.array([0.0, -C.ARENA_EXTENT_Y, 0.0])
@@ -44,20 +46,26 @@ def drive_to(car_pos: np.ndarray, car_rot: np.ndarray, target: np.ndarray, speed
                        handbrake=SLIDE_ANGLE_RAD < abs(angle) < REVERSE_ANGLE_RAD)
 
 
-class ScriptedBot(ABC):
-    name = "scripted"
+class ScriptedBot(Policy):
+    """A hand-written policy; ``bot_name`` is what ``scripted:<bot_name>`` names it by."""
+
+    bot_name = "scripted"
+
+    @property
+    def name(self) -> str:
+        return f"scripted:{self.bot_name}"
 
     @abstractmethod
-    def act(self, agent: str, state: GameState) -> CarControls:
+    def controls(self, agent: str, state: GameState) -> CarControls:
         """Controls for ``agent`` this decision."""
 
 
 class BallChaser(ScriptedBot):
     """Drives through the ball towards the opponent goal, jumps at balls in reach above the car."""
 
-    name = "ball_chaser"
+    bot_name = "ball_chaser"
 
-    def act(self, agent: str, state: GameState) -> CarControls:
+    def controls(self, agent: str, state: GameState) -> CarControls:
         car = state.cars[agent]
         if car.is_demoed:
             return CarControls()
@@ -79,16 +87,16 @@ class BallChaser(ScriptedBot):
 class Goalie(ScriptedBot):
     """Keeps between ball and own goal; clears the ball when it comes into the defensive third."""
 
-    name = "goalie"
+    bot_name = "goalie"
 
-    def act(self, agent: str, state: GameState) -> CarControls:
+    def controls(self, agent: str, state: GameState) -> CarControls:
         car = state.cars[agent]
         if car.is_demoed:
             return CarControls()
         pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         ball = team_frame(agent, state.ball.pos)
         if ball[1] < -C.ARENA_EXTENT_Y / 3:
-            return BallChaser().act(agent, state)
+            return BallChaser().controls(agent, state)
         post = np.array([np.clip(ball[0] * 0.4, -700.0, 700.0), OWN_GOAL[1] + 250.0, 0.0])
         controls = drive_to(pos, rot, post, speed_up=np.linalg.norm(post - pos) > 2500.0, arrive_uu=120.0)
         if np.linalg.norm(post - pos) < 250.0:  # in position: turn to face the ball
@@ -118,13 +126,13 @@ class FlipChaser(ScriptedBot):
     again with pitch), so one instance plays any number of cars and needs no reset.
     """
 
-    name = "flip_chaser"
+    bot_name = "flip_chaser"
     KICKOFF_DODGE_S = 0.2       # time to contact (uu to the ball's surface / speed) at which the kickoff jump starts
     CONTACT_UU = 160.0          # car centre to ball centre at a front touch
     STEER_DEADBAND_RAD = 0.05   # target within this angle: drive straight
     DEFLECT_SIDE_UU, DEFLECT_BACK_UU = 250.0, 400.0
 
-    def act(self, agent: str, state: GameState) -> CarControls:
+    def controls(self, agent: str, state: GameState) -> CarControls:
         car = state.cars[agent]
         if car.is_demoed:
             return CarControls()
@@ -169,9 +177,9 @@ class FlipChaser(ScriptedBot):
 class Idle(ScriptedBot):
     """Does nothing: an empty net for shooting practice."""
 
-    name = "idle"
+    bot_name = "idle"
 
-    def act(self, agent: str, state: GameState) -> CarControls:
+    def controls(self, agent: str, state: GameState) -> CarControls:
         return CarControls()
 
 
@@ -218,7 +226,7 @@ def _out_of_goal_mouth(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
     return target
 
 
-SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {cls.name: cls for cls in (BallChaser, FlipChaser, Goalie, Idle)}
+SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {cls.bot_name: cls for cls in (BallChaser, FlipChaser, Goalie, Idle)}
 
 
 def make_scripted(name: str) -> ScriptedBot:

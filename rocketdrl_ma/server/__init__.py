@@ -2,7 +2,7 @@
 
 ``rocketdrl_ma.server.Bot`` (subclass it, implement ``act``, call ``run``), ``PolicyBot``,
 ``Spectator`` (verified, typed states and events of a match), ``LobbyClient``, ``ClientSettings`` and
-``MatchServer`` are imported on first use, so ``rocketdrl_ma.server.commands`` (the CLI) loads nothing
+``MatchServer`` are imported on first use, so ``rocketdrl_ma.commands.server`` (the CLI) loads nothing
 heavy.
 """
 from __future__ import annotations

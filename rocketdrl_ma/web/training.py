@@ -20,7 +20,7 @@ import threading
 import time
 from pathlib import Path
 
-from rocketdrl_ma.policies.registry import Policy
+from rocketdrl_ma.policies.base import Policy
 from rocketdrl_ma.server.protocol import check_name, encode_state, pack
 from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
 

@@ -25,7 +25,7 @@ def test_batched_observations_equal_the_reference_builder(config, overrides):
         if step % 4:  # mostly ball chasing, so that touches and bumps happen
             for k, lane in enumerate(vec.lanes):
                 for j, agent in enumerate(agents):
-                    actions[k, j] = lane.action_parser.encode(chaser.act(agent, lane.game_state))
+                    actions[k, j] = lane.action_parser.encode(chaser.controls(agent, lane.game_state))
         obs, _, terminated, truncated, _ = vec.step(actions)
         for k, lane in enumerate(vec.lanes):
             state = lane.game_state

@@ -139,7 +139,7 @@ def test_numeric_infos_keep_their_keys_and_count_this_agents_events():
     touches = 0.0
     for _ in range(120):
         state = env.unwrapped._state
-        actions = {a: env.action_parser.encode(chaser.act(a, state)) for a in env.agents}
+        actions = {a: env.action_parser.encode(chaser.controls(a, state)) for a in env.agents}
         _, rewards, _, _, infos = env.step(actions)
         assert all(set(info) == keys for info in infos.values())
         touches += infos["blue_0"]["touch"] + infos["orange_0"]["touch"]

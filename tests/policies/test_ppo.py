@@ -22,7 +22,8 @@ from rocketdrl_ma.policies.ppo.evaluate import evaluate
 from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.ppo.shaping import potential
 from rocketdrl_ma.policies.ppo.trainer import make_loss, ppo_update
-from rocketdrl_ma.policies.registry import ObservingPolicy, load_policy
+from rocketdrl_ma.policies.base import ObservingPolicy
+from rocketdrl_ma.policies.registry import load_policy
 
 # A 1v1 match cut short so episodes end within a few hundred decisions; both cars share the policy.
 TINY = {

@@ -15,7 +15,7 @@ def _play(blue: str, orange: str, clock_s: float, seed: int = 0) -> Match:
     bots = {"blue_0": make_scripted(blue), "orange_0": make_scripted(orange)}
     while not (m.is_terminated() or m.is_truncated()):
         state = m.game_state()
-        m.advance({agent: bots[agent].act(agent, state) for agent in m.cars}, 8)
+        m.advance({agent: bots[agent].controls(agent, state) for agent in m.cars}, 8)
     return m
 
 
@@ -53,7 +53,7 @@ def test_flip_chaser_controls_are_rows_of_the_lookup_table():
     jumps = 0
     while not (m.is_terminated() or m.is_truncated()):
         state = m.game_state()
-        controls = {"blue_0": bot.act("blue_0", state), "orange_0": chaser.act("orange_0", state)}
+        controls = {"blue_0": bot.controls("blue_0", state), "orange_0": chaser.controls("orange_0", state)}
         mine = controls["blue_0"]
         assert table.parse("blue_0", table.encode(mine)) == mine
         jumps += mine.jump
@@ -74,8 +74,8 @@ def test_flip_chaser_touches_the_ball_first_at_kickoffs():
                 if m.last_touch is not None:
                     break
                 state = m.game_state()
-                m.advance({agent: bots[agent].act(agent, state) for agent in m.cars}, 8)
-            first += bots[m.last_touch].name == "flip_chaser"
+                m.advance({agent: bots[agent].controls(agent, state) for agent in m.cars}, 8)
+            first += bots[m.last_touch].name == "scripted:flip_chaser"
     assert first >= 10, first
 
 
@@ -87,7 +87,7 @@ def _env_match(blue: str, orange: str, seed: int, action: str) -> tuple[int, int
     summary: dict = {}
     while env.agents:
         state = env.rules.game_state()
-        _, _, _, _, infos = env.step({a: env.action_parser.encode(bots[a].act(a, state)) for a in env.agents})
+        _, _, _, _, infos = env.step({a: env.action_parser.encode(bots[a].controls(a, state)) for a in env.agents})
         summary = next(iter(infos.values())).get("summary", summary)
     env.close()
     return summary["score"]["blue"], summary["score"]["orange"]

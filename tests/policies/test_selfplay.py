@@ -10,13 +10,13 @@ from rocketdrl_ma.cli import main
 from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
 from rocketdrl_ma.policies.ppo.model import PPOModel, action_spec
 from rocketdrl_ma.policies.registry import load_policy
-from rocketdrl_ma.policies.selfplay.imitation import collect, disagreement
-from rocketdrl_ma.policies.selfplay.pfsp import PFSP
+from rocketdrl_ma.policies.ppo.selfplay.imitation import collect, disagreement
+from rocketdrl_ma.policies.ppo.selfplay.pfsp import PFSP
 from rocketdrl_ma.policies.ppo.rollout import RolloutEnv
 from rocketdrl_ma.policies.ppo.rollout_policy import RolloutPolicy
 from rocketdrl_ma.policies.ppo.trainer import sync_controls, worker_config
-from rocketdrl_ma.policies.selfplay.games import SELF, SelfPlayGames
-from rocketdrl_ma.policies.selfplay.pool import OpponentPool
+from rocketdrl_ma.policies.ppo.selfplay.games import SELF, SelfPlayGames
+from rocketdrl_ma.policies.ppo.selfplay.pool import OpponentPool
 
 # policies/selfplay_1v1.yaml cut down: 3 s matches (so episodes end and PFSP gets results), a tiny network
 TINY = {"env_overrides": {"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 1.0},
@@ -153,7 +153,7 @@ def test_each_copy_of_the_games_plays_the_lone_env_game_of_its_seed():
         bot = make_scripted("ball_chaser")
         assert np.allclose(rows[0][i], obs[learner], rtol=0.0, atol=1e-6)
         for t, result in enumerate(results):
-            step = {learner: actions[t, i], opponent_name: env.action_parser.encode(bot.act(opponent_name,
+            step = {learner: actions[t, i], opponent_name: env.action_parser.encode(bot.controls(opponent_name,
                                                                                           env.game_state))}
             obs, rewards, term, trunc, _ = env.step(step)
             assert rewards[learner] == result.reward[i]
@@ -205,7 +205,7 @@ def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tm
     other car), each state labelled with the bot's row; refitting on it makes the clone take those rows."""
     from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
     from rocketdrl_ma.policies.scripted import make_scripted
-    from rocketdrl_ma.policies.selfplay.imitation import clone
+    from rocketdrl_ma.policies.ppo.selfplay.imitation import clone
 
     overrides = {**TINY["env_overrides"], "clock_s": 4.0, "action": "lookup"}
     cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY, "env_overrides": overrides,
@@ -228,8 +228,8 @@ def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tm
     for t in range(120):  # the same game again: the clone's car on alternating sides, the bot on the other
         mine = ("blue_0", "orange_0")[episode % 2]
         state = env.game_state
-        assert np.array_equal(seen[mine], obs[t]) and labels[t] == env.action_parser.encode(bot.act(mine, state))
-        actions = {a: env.action_parser.encode(bot.act(a, state)) for a in env.agents}
+        assert np.array_equal(seen[mine], obs[t]) and labels[t] == env.action_parser.encode(bot.controls(mine, state))
+        actions = {a: env.action_parser.encode(bot.controls(a, state)) for a in env.agents}
         actions[mine] = int(model.act_deterministic(obs[t][None])[0])
         seen = env.step(actions)[0]
         if not env.agents:
@@ -255,7 +255,7 @@ def test_a_warm_started_run_keeps_the_clones_input_statistics(tmp_path):
 
 
 def test_kickstart_section_and_its_fading_weight():
-    from rocketdrl_ma.policies.selfplay.kickstart import teacher_weight
+    from rocketdrl_ma.policies.ppo.selfplay.kickstart import teacher_weight
 
     base = load_train_config("policies/selfplay_1v1.yaml")
     for bad, match in (({"bot": "x"}, "selfplay.kickstart.bot"), ({"weight": 0}, "selfplay.kickstart.weight"),
@@ -284,7 +284,7 @@ def test_teacher_labels_are_the_bots_rows_for_the_learners_cars_on_both_sides(tm
         for i, env in enumerate(games.envs):
             (agent,) = games.learners(i)
             sides.add(agent)
-            assert labels[i] == env.action_parser.encode(goalie.act(agent, env.game_state))
+            assert labels[i] == env.action_parser.encode(goalie.controls(agent, env.game_state))
         step, _, _ = games.step(rng.integers(0, 90, games.n_rows), rng.integers(0, 90, games.n_rows))
         ended = step.terminated | step.truncated
         if ended.any():

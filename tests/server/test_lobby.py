@@ -205,7 +205,7 @@ class Recorder(Bot):
 
     def act(self, obs, info):
         self.seen.append((obs.shape, obs.dtype, info["decision"], isinstance(info["state"], GameState)))
-        return self.encoder.encode(self.chaser.act(info["agent"], info["state"]))
+        return self.encoder.encode(self.chaser.controls(info["agent"], info["state"]))
 
 
 def play_threads(*jobs) -> dict:

@@ -163,6 +163,6 @@ def write_replay(path: Path, config: str = "matches/2v2.yaml", decisions: int = 
     bots = {agent: make_scripted("ball_chaser") for agent in env.possible_agents}
     while env.agents:
         state = env.game_state
-        env.step({agent: env.action_parser.encode(bots[agent].act(agent, state)) for agent in env.agents})
+        env.step({agent: env.action_parser.encode(bots[agent].controls(agent, state)) for agent in env.agents})
     env.close()
     return path

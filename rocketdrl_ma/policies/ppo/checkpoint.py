@@ -19,7 +19,7 @@ import torch
 from rocketdrl_ma.config import REPO_ROOT, load_config
 from rocketdrl_ma.env.actions import make_action_parser
 from rocketdrl_ma.env.observations import make_obs_builder
-from rocketdrl_ma.policies.registry import ObservingPolicy
+from rocketdrl_ma.policies.base import ObservingPolicy
 
 from .model import PPOModel
 

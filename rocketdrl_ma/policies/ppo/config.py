@@ -21,7 +21,7 @@ their mean at the idle car's controls (no jump, boost or drift), so early explor
 hops. ``curriculum`` (as ML-Agents' lessons, over a minigame's ``difficulty``): start at ``start``, and
 each time the last 100 training episodes succeed at least ``threshold`` of the time, raise the
 difficulty by ``step`` up to 1; empty: train at the env config's difficulty throughout.
-``selfplay``: train one team against an opponent pool (``policies/selfplay/config.py``); empty: none.
+``selfplay``: train one team against an opponent pool (``policies/ppo/selfplay/config.py``); empty: none.
 ``features``: fixed inputs the model computes from the observation (``features.py``): ``none``, or
 ``car_local`` (ball and other cars in the car's own frame; needs the ``team_relative`` observation).
 ``n_workers``: rollout worker processes, each stepping ``ceil(n_envs / n_workers)`` env copies with its own copy
@@ -42,7 +42,7 @@ import yaml
 
 from rocketdrl_ma.config import load_config, optional_section, resolve_config_path
 
-from rocketdrl_ma.policies.selfplay.config import check_selfplay
+from rocketdrl_ma.policies.ppo.selfplay.config import check_selfplay
 
 from .features import FEATURES
 from .shaping import check_shaping

@@ -53,7 +53,7 @@ class RolloutEnv(EnvBase):
         self.selfplay = bool(cfg["selfplay"])
         kickstart = cfg["selfplay"].get("kickstart") if self.selfplay else None
         if self.selfplay:
-            from rocketdrl_ma.policies.selfplay.games import SelfPlayGames
+            from rocketdrl_ma.policies.ppo.selfplay.games import SelfPlayGames
             self.games = SelfPlayGames(cfg, copies, first_copy)
             self.copy_rows = self.games.team_size
         else:

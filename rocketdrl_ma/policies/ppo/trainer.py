@@ -27,9 +27,9 @@ from tqdm import tqdm
 
 from rocketdrl_ma.config import load_config
 from rocketdrl_ma.physics import CarControls
-from rocketdrl_ma.policies.selfplay.imitation import imitation_loss
-from rocketdrl_ma.policies.selfplay.kickstart import teacher_weight
-from rocketdrl_ma.policies.selfplay.pool import OpponentPool
+from rocketdrl_ma.policies.ppo.selfplay.imitation import imitation_loss
+from rocketdrl_ma.policies.ppo.selfplay.kickstart import teacher_weight
+from rocketdrl_ma.policies.ppo.selfplay.pool import OpponentPool
 
 from .checkpoint import ModelPolicy, checkpoint_meta, read_meta, resolve_checkpoint, save_checkpoint, sidecar
 from .envs import Episode

@@ -17,9 +17,9 @@ def _zenoh_settings(args: argparse.Namespace):
 def _run_web(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .bridge import PageServer, is_loopback_host, run_page_server
-    from .feed import SpectatorFeed
-    from .replays import ReplayLibrary
+    from rocketdrl_ma.web.bridge import PageServer, is_loopback_host, run_page_server
+    from rocketdrl_ma.web.feed import SpectatorFeed
+    from rocketdrl_ma.web.replays import ReplayLibrary
 
     try:
         if not is_loopback_host(args.host) and not args.allow_remote:

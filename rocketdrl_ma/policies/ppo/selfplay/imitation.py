@@ -69,7 +69,7 @@ def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: in
             actions = {}
             for agent in env.agents:
                 mine = agent.startswith(side) or (model is None and opponent == bot)
-                label = env.action_parser.encode((player if mine else other).act(agent, state))
+                label = env.action_parser.encode((player if mine else other).controls(agent, state))
                 actions[agent] = label
                 if mine:
                     obs_rows.append(obs[agent])

@@ -119,7 +119,7 @@ class SelfPlayGames:
         labels = []
         for i, env in enumerate(self.envs):
             state = env.game_state
-            labels += [env.action_parser.encode(self.teachers[i].act(agent, state)) for agent in self.learners(i)]
+            labels += [env.action_parser.encode(self.teachers[i].controls(agent, state)) for agent in self.learners(i)]
         return np.asarray(labels)
 
     def step(self, learner_actions: np.ndarray,
@@ -137,7 +137,7 @@ class SelfPlayGames:
             if 0 <= scripted < n_scripted:
                 bot, state = self.scripted[i][scripted], env.game_state
                 for col, agent in zip(self.team_columns[side], self.team_agents[side]):
-                    full[i, col] = env.action_parser.encode(bot.act(agent, state))
+                    full[i, col] = env.action_parser.encode(bot.controls(agent, state))
             else:
                 full[i, self.team_columns[side]] = opponent_actions[rows]
         obs_all, rewards, term, trunc, infos = self.vec.step(full)

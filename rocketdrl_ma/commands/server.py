@@ -11,7 +11,7 @@ DEFAULT_CONNECT = "tcp/127.0.0.1:7447"
 def _clean_errors(run):
     """Bad input and server refusals end the command with one line, not a traceback."""
     def wrapped(args: argparse.Namespace) -> int:
-        from .bot import ServerError, ServerGone
+        from rocketdrl_ma.server.bot import ServerError, ServerGone
         try:
             return run(args)
         except (ValueError, ServerError, ServerGone, TimeoutError) as e:
@@ -22,7 +22,7 @@ def _clean_errors(run):
 
 def _client_settings(args: argparse.Namespace):
     """A ``ClientSettings`` from ``--config`` (a client YAML) and the flags that override it."""
-    from .settings import ClientSettings, ZenohSettings
+    from rocketdrl_ma.server.settings import ClientSettings, ZenohSettings
     fields = {"server": args.server, "server_key": args.server_key, "user": args.user,
               "admin_secret_file": getattr(args, "admin_secret_file", None), "key_dir": args.key_dir}
     fields = {k: v for k, v in fields.items() if v is not None}
@@ -53,8 +53,8 @@ def _run_serve(args: argparse.Namespace) -> int:
     import signal
     import threading
 
-    from .lobby import MatchServer
-    from .settings import ServerSettings
+    from rocketdrl_ma.server.lobby import MatchServer
+    from rocketdrl_ma.server.settings import ServerSettings
 
     logging.basicConfig(level=getattr(logging, args.log_level.upper()), format="%(asctime)s %(name)s %(message)s")
     settings = ServerSettings.load(args.config)
@@ -88,7 +88,7 @@ def _settings_dict(settings) -> dict:
 
 
 def _run_bot(args: argparse.Namespace) -> int:
-    from .bot import PolicyBot
+    from rocketdrl_ma.server.bot import PolicyBot
 
     bot = PolicyBot(args.policy, name=args.name)
 
@@ -107,7 +107,7 @@ def _run_bot(args: argparse.Namespace) -> int:
 
 
 def _run_watch(args: argparse.Namespace) -> int:
-    from .watch import watch
+    from rocketdrl_ma.server.watch import watch
 
     final = watch(args.match, client=_client_settings(args), video=args.video, replay=args.replay,
                   live=not args.no_live, timeout_s=args.timeout)
@@ -139,7 +139,7 @@ def _parse_seats(items: list[str] | None) -> dict:
 
 
 def _run_lobby(args: argparse.Namespace) -> int:
-    from .client import LobbyClient
+    from rocketdrl_ma.server.client import LobbyClient
 
     if args.action != "list" and not args.target:
         raise ValueError(f"lobby {args.action}: needs a {'config name' if args.action == 'create' else 'match id'}")
@@ -173,7 +173,7 @@ def _run_lobby(args: argparse.Namespace) -> int:
 
 
 def _run_router(args: argparse.Namespace) -> int:
-    from .router import RouterSettings, run_router
+    from rocketdrl_ma.server.router import RouterSettings, run_router
 
     settings = RouterSettings.load(args.config)
     run_router(settings, ready=lambda s: print(f"router listening on {list(settings.zenoh.listen_endpoints())}"
@@ -183,7 +183,7 @@ def _run_router(args: argparse.Namespace) -> int:
 
 
 def _run_keys(args: argparse.Namespace) -> int:
-    from .keygen import make_keys
+    from rocketdrl_ma.server.keygen import make_keys
 
     for line in make_keys(args.config, tls_hosts=args.tls_host, connect=args.connect, clients_dir=args.clients):
         print(line, flush=True)

@@ -7,11 +7,11 @@ import argparse
 def _run_league(args: argparse.Namespace) -> int:
     from rocketdrl_ma.results import ResultsStore
 
-    from .config import load_league_config
-    from .ratings import rate
-    from .report import write_report
-    from .runner import run_league
-    from .schedule import schedule
+    from rocketdrl_ma.league.config import load_league_config
+    from rocketdrl_ma.league.ratings import rate
+    from rocketdrl_ma.league.report import write_report
+    from rocketdrl_ma.league.runner import run_league
+    from rocketdrl_ma.league.schedule import schedule
 
     overrides = {"results": args.results} if args.results else {}
     cfg = load_league_config(args.config, overrides)
@@ -36,8 +36,8 @@ def _run_league(args: argparse.Namespace) -> int:
 def _run_league_bot(args: argparse.Namespace) -> int:
     from rocketdrl_ma.server.bot import PolicyBot, local_client_settings
 
-    from .config import check_name
-    from .remote import serve_invitations
+    from rocketdrl_ma.league.config import check_name
+    from rocketdrl_ma.league.remote import serve_invitations
 
     entrant = check_name("entrant", args.entrant)
     session = local_client_settings(args.connect).open()
@@ -53,8 +53,8 @@ def _run_league_bot(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("league", help="play a league (league.yaml): ratings, payoff matrix, report")
-    p.add_argument("config", help="league YAML, e.g. league.yaml")
+    p = sub.add_parser("league", help="play a league (e.g. leagues/main.yaml): ratings, payoff matrix, report")
+    p.add_argument("config", help="league YAML, e.g. leagues/main.yaml")
     p.add_argument("--results", default=None, help="replace the config's results store (SQLite)")
     p.add_argument("--report", default=None, help="replace the config's report folder")
     p.add_argument("--max-matches", type=int, default=None, help="play at most this many missing matches")
