@@ -1,7 +1,10 @@
 """Fidelity benchmark: every scripted scenario on RocketSim (the oracle) and on our PyBullet physics.
 
 Prints a markdown table: quantity | reference | RocketSim | ours | error % (ours vs RocketSim), then the 5 trajectory
-scenarios (distance between final positions as a percentage of the RocketSim path length; the test allows 10 %).
+scenarios (distance between final positions as a percentage of the RocketSim path length; the test allows 10 %), then
+the contact grids of tests/physics/contact_scenes.py (every scene at 8 sub-tick phases), worst case per family group:
+car-ball (ball speed and direction 12 ticks after the first touch), floor bounces (rebound ratio), car-car (outcome,
+speeds 6 ticks after the hit).
 
 Run from the repo root: ``python benchmarks/fidelity.py`` (``--rocketsim-only`` skips our engine).
 The scenario and adapter code lives in tests/physics/ (fidelity_scenarios.py, rocketsim_oracle.py) and is shared with
@@ -24,6 +27,7 @@ for p in (ROOT, os.path.join(ROOT, "tests", "physics")):
 
 import numpy as np  # noqa: E402
 
+import contact_scenes as cs  # noqa: E402
 from fidelity_scenarios import QUANTITIES, TRAJECTORIES, run_quantity, run_trajectory_on  # noqa: E402
 from rocketsim_oracle import OursAdapter, RocketSimAdapter, init_rocketsim  # noqa: E402
 
@@ -33,6 +37,60 @@ def _fmt(v: float | None) -> str:
         return "—"
     a = abs(v)
     return f"{v:.4f}" if a < 10 else f"{v:.2f}" if a < 1000 else f"{v:.1f}"
+
+
+def _group(scene: cs.Scene) -> str:
+    return scene.key.split("-")[0]
+
+
+def _worst_by_group(scenes: list[cs.Scene], errors: list[tuple[float, ...]]) -> dict[str, tuple[int, tuple]]:
+    """Scene count and element-wise worst error tuple per group."""
+    out: dict[str, tuple[int, tuple]] = {}
+    for scene, err in zip(scenes, errors):
+        n, worst = out.get(_group(scene), (0, tuple(0.0 for _ in err)))
+        out[_group(scene)] = (n + 1, tuple(max(w, e) for w, e in zip(worst, err)))
+    return out
+
+
+def print_contact_grids() -> None:
+    print("| contact grid (8 sub-tick phases each) | scenes | worst speed error % | worst angle (deg) | "
+          "same contact ticks / pushes | issue bound |")
+    print("|---|---:|---:|---:|---|---|")
+    scenes = cs.car_ball_grid()
+    theirs, ours = cs.run_rocketsim(scenes), cs.run_ours(scenes)
+    errors, same = [], {}
+    for scene, a, b in zip(scenes, theirs, ours):
+        speed_err, angle = cs.speed_and_angle_error(cs.ball_velocity_after_touch(b), cs.ball_velocity_after_touch(a))
+        errors.append((100.0 * abs(speed_err), angle))
+        ok = b.touches == a.touches and b.extra_pushes == a.extra_pushes
+        same[_group(scene)] = same.get(_group(scene), True) and ok
+    for group, (n, (speed, angle)) in _worst_by_group(scenes, errors).items():
+        print(f"| car-ball, {group} (500-2300 uu/s, ball centred / +-40 uu) | {n} | {speed:.2f} | {angle:.2f} | "
+              f"{'yes' if same[group] else 'NO'} | 5 % / 2 deg |")
+
+    scenes = cs.bounce_grid()
+    theirs, ours = cs.run_rocketsim(scenes), cs.run_ours(scenes)
+    ratios = [cs.rebound_ratio(b) for b in ours]
+    rs_ratios = [cs.rebound_ratio(a) for a in theirs]
+    path = max(float(np.abs(b.ball_pos - a.ball_pos).max()) for a, b in zip(theirs, ours))
+    print(f"| floor bounce, 150-3000 uu/s straight and 45 deg | {len(scenes)} | rebound {min(ratios):.3f}-"
+          f"{max(ratios):.3f} (RocketSim {min(rs_ratios):.3f}-{max(rs_ratios):.3f}) | path within {path:.4f} uu | "
+          f"- | 0.57-0.63 |")
+
+    scenes = cs.car_car_grid()
+    theirs, ours = cs.run_rocketsim(scenes), cs.run_ours(scenes)
+    errors, same = [], {}
+    for scene, a, b in zip(scenes, theirs, ours):
+        t = a.hits[0][0] + 6 if a.hits else len(a.car_vel) - 1
+        speed_a, speed_b = np.linalg.norm(a.car_vel[t], axis=1), np.linalg.norm(b.car_vel[t], axis=1)
+        floor = 0.1 * float(np.linalg.norm(scene.cars[0].vel))
+        alive = np.flatnonzero(~a.car_demoed[t])
+        errors.append((max((100.0 * abs(speed_b[c] - speed_a[c]) / max(speed_a[c], floor) for c in alive),
+                           default=0.0),))
+        same[_group(scene)] = same.get(_group(scene), True) and cs.car_hit_outcome(b) == cs.car_hit_outcome(a)
+    for group, (n, (speed,)) in _worst_by_group(scenes, errors).items():
+        print(f"| car-car, {group} | {n} | {speed:.2f} | - | outcome {'same' if same[group] else 'DIFFERS'} | "
+              f"5 %, same outcome |")
 
 
 def main(argv=None) -> int:
@@ -83,6 +141,10 @@ def main(argv=None) -> int:
                 err = f"failed: {type(e).__name__}"
                 traceback.print_exc(file=sys.stderr)
         print(f"| {t.label} | {np.round(rs_final, 1).tolist()} | {rs_len:.1f} | {ours_s} | {err} |")
+
+    if ours_ok:
+        print()
+        print_contact_grids()
 
     print()
     if ours_err:
