@@ -14,6 +14,7 @@ from typing import Any
 import yaml
 
 from rocketdrl_ma.rules import GAME_MODES
+from rocketdrl_ma.rules.rewards import check_weights
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -121,14 +122,7 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         raise ValueError(f"max_cycles: must be an int >= 1 or null, got {cfg['max_cycles']!r}")
     if cfg["info_format"] not in INFO_FORMATS:
         raise ValueError(f"info_format: {cfg['info_format']!r} is not one of {list(INFO_FORMATS)}")
-    if not isinstance(cfg["rewards"], dict):
-        raise ValueError(f"rewards: expected a mapping of term to weight, got {cfg['rewards']!r}")
-    allowed_terms = GAME_MODES[mode].REWARD_TERMS
-    for term, weight in cfg["rewards"].items():
-        if term not in allowed_terms:
-            raise ValueError(f"rewards: unknown term {term!r}; allowed: {list(allowed_terms)}")
-        if isinstance(weight, bool) or not isinstance(weight, (int, float)):
-            raise ValueError(f"rewards.{term}: expected a number, got {weight!r}")
+    cfg["rewards"] = check_weights(GAME_MODES[mode].REWARD_TERMS, cfg["rewards"], "rewards")
     for key in ("observation", "action"):
         spec = cfg[key]
         if isinstance(spec, str):

@@ -1,9 +1,9 @@
 """The base rule class: a game mode's logic over an ``Arena``.
 
 A game mode says how it spawns (state mutators), what each tick means (``on_tick``: clock, goals,
-events), what each agent earns (``reward_terms``: named terms, weighted from the config), when it
-ends (``is_terminated`` / ``is_truncated``) and how it went (``summary``). The full match and every
-minigame are subclasses; a new mode needs nothing else.
+events), what each agent may earn (``REWARD_TERMS``: named terms of ``rewards.py``, weighted from the
+config), when it ends (``is_terminated`` / ``is_truncated``) and how it went (``summary``). The full match
+and every minigame are subclasses; a new mode needs nothing else.
 """
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from rocketdrl_ma.physics import Arena, Car, CarControls, DemoMode, MutatorConfi
 from rocketdrl_ma.physics import constants as C
 
 from .mutators import KickoffMutator, StateMutator
+from .rewards import CombinedReward, TermMakers
 from .state import GameState, Obstacle, agent_names, agent_team
 
 NEUTRAL = CarControls()
@@ -39,8 +40,10 @@ def ball_heading_into_goal(pos: np.ndarray, vel: np.ndarray, goal_sign: float) -
 class Rules(ABC):
     """Owns one arena, its cars (one per agent) and the logic of a game mode."""
 
-    #: reward term names a subclass computes; the config may weight any of them.
-    REWARD_TERMS: tuple[str, ...] = ()
+    #: the reward terms a mode offers (name -> maker); the config's ``rewards:`` may weight any of them
+    REWARD_TERMS: TermMakers = {}
+    #: weights of terms the config does not mention
+    DEFAULT_REWARD_WEIGHTS: dict[str, float] = {}
 
     def __init__(self, blue_size: int = 1, orange_size: int = 1, car_preset: str = "octane",
                  reward_weights: dict[str, float] | None = None, boost_pads: bool = True, demos: bool = True):
@@ -52,11 +55,8 @@ class Rules(ABC):
         self.blue_size, self.orange_size = blue_size, orange_size
         self.car_preset = car_preset
         self.possible_agents = agent_names(blue_size, orange_size)
-        weights = dict(reward_weights or {})
-        unknown = set(weights) - set(self.REWARD_TERMS)
-        if unknown:
-            raise ValueError(f"rewards: unknown term(s) {sorted(unknown)}; allowed: {list(self.REWARD_TERMS)}")
-        self.reward_weights = {term: float(weights.get(term, 0.0)) for term in self.REWARD_TERMS}
+        self.rewards = CombinedReward.from_weights(self.REWARD_TERMS,
+                                                   {**self.DEFAULT_REWARD_WEIGHTS, **(reward_weights or {})})
         self.boost_pads, self.demos = boost_pads, demos
         self.arena: Arena | None = None
         self.cars: dict[str, Car] = {}
@@ -89,10 +89,6 @@ class Rules(ABC):
     def controls_frozen(self) -> bool:
         """True while inputs are ignored (a kickoff countdown)."""
         return False
-
-    @abstractmethod
-    def reward_terms(self, agent: str, state: GameState) -> dict[str, float]:
-        """This decision's unweighted value of every term in ``REWARD_TERMS`` for ``agent``."""
 
     @abstractmethod
     def is_terminated(self) -> bool:
@@ -138,6 +134,7 @@ class Rules(ABC):
         self._touching = set()
         self.last_controls = {agent: NEUTRAL for agent in self.cars}
         self.on_reset(rng)
+        self.rewards.reset(list(self.cars), self.game_state())
 
     def advance(self, controls: dict[str, CarControls], ticks: int) -> None:
         """Apply ``controls`` for ``ticks`` physics ticks, running the game logic after each.
@@ -215,9 +212,7 @@ class Rules(ABC):
 
     def weighted_rewards(self, agent: str, state: GameState) -> tuple[float, dict[str, float]]:
         """The agent's reward and its per-term breakdown (each term already weighted)."""
-        terms = self.reward_terms(agent, state)
-        weighted = {term: self.reward_weights[term] * float(terms.get(term, 0.0)) for term in self.REWARD_TERMS}
-        return float(sum(weighted.values())), weighted
+        return self.rewards.get(agent, state)
 
     def close(self) -> None:
         if self.arena is not None:

@@ -1,15 +1,14 @@
 """The full match: 1v1 to 4v4, clock, kickoff countdown, goals, overtime and the zero-second rule."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from rocketdrl_ma.physics import constants as C
 
+from . import rewards
 from .base import Rules, ball_heading_into_goal
 from .mutators import KickoffMutator
-from .state import ATTACKED_GOAL_CENTER, BLUE, ORANGE, TEAM_NAMES, GameState, agent_team
+from .state import BLUE, ORANGE, TEAM_NAMES, agent_team
 
 BALL_ON_GROUND_Z = C.BALL_RADIUS + 5.0
 
@@ -17,11 +16,6 @@ BALL_ON_GROUND_Z = C.BALL_RADIUS + 5.0
 def opponent_goal_sign(team: int) -> float:
     """+1 if the team attacks the +y goal (blue), -1 for orange."""
     return 1.0 if team == BLUE else -1.0
-
-
-def _norm(v: np.ndarray) -> float:
-    """``np.linalg.norm`` of a 3-vector, the same arithmetic (sqrt of ``v.dot(v)``) without its overhead."""
-    return math.sqrt(v.dot(v))
 
 
 class Match(Rules):
@@ -34,12 +28,14 @@ class Match(Rules):
     zero-second rule). Overtime longer than ``overtime_limit_s`` truncates the episode as a draw.
     """
 
-    REWARD_TERMS = ("goal", "touch", "ball_velocity_to_goal", "player_velocity_to_ball", "boost")
+    REWARD_TERMS = {"goal": rewards.GoalScored, "touch": rewards.BallTouched,
+                    "ball_velocity_to_goal": rewards.BallVelocityToGoal,
+                    "player_velocity_to_ball": rewards.PlayerVelocityToBall, "boost": rewards.BoostAmount}
+    DEFAULT_REWARD_WEIGHTS = {"goal": 10.0}
 
     def __init__(self, team_size: int = 1, clock_s: float = 300.0, kickoff_countdown_s: float = 3.0,
                  overtime_limit_s: float | None = 300.0, **kwargs):
-        weights = {"goal": 10.0, **(kwargs.pop("reward_weights", None) or {})}
-        super().__init__(blue_size=team_size, orange_size=team_size, reward_weights=weights, **kwargs)
+        super().__init__(blue_size=team_size, orange_size=team_size, **kwargs)
         if not clock_s > 0.0:
             raise ValueError(f"clock_s: must be > 0, got {clock_s!r}")
         if kickoff_countdown_s < 0.0:
@@ -59,7 +55,6 @@ class Match(Rules):
         self.overtime_s = 0.0
         self.ended = False
         self.countdown_s = self.kickoff_countdown_s
-        self.goals_this_decision: list[int] = []
         self.decisions = 0
         self._classified = 0
         self._ball_prev = None
@@ -118,14 +113,12 @@ class Match(Rules):
         self._classified = len(self.events)
 
     def begin_decision(self, controls) -> None:
-        self.goals_this_decision = []
         self._classified = 0
         self.decisions += 1
         super().begin_decision(controls)
 
     def _goal(self, team: int) -> None:
         self.score[team] += 1
-        self.goals_this_decision.append(team)
         scorer = self.last_touch
         own_goal = scorer is not None and agent_team(scorer) != team
         if scorer is not None and not own_goal:
@@ -161,17 +154,3 @@ class Match(Rules):
         if self.score[BLUE] != self.score[ORANGE]:
             winner = "blue" if self.score[BLUE] > self.score[ORANGE] else "orange"
         return {**self.scoreboard(), "winner": winner, "stats": {a: dict(s) for a, s in self.stats.items()}}
-
-    def reward_terms(self, agent: str, state: GameState) -> dict[str, float]:
-        team = agent_team(agent)
-        goal = sum(1.0 if scored == team else -1.0 for scored in self.goals_this_decision)
-        car = state.cars[agent]
-        ball = state.ball
-        to_goal = ATTACKED_GOAL_CENTER[team] - ball.pos
-        ball_to_goal = float(ball.vel @ to_goal / (_norm(to_goal) * C.BALL_MAX_SPEED))
-        to_ball = ball.pos - car.pos
-        dist = _norm(to_ball)
-        player_to_ball = float(car.vel @ to_ball / (dist * C.CAR_MAX_SPEED)) if dist > 1e-6 else 0.0
-        touched = any(e["kind"] == "touch" and e["agent"] == agent for e in state.events)
-        return {"goal": goal, "touch": float(touched), "ball_velocity_to_goal": ball_to_goal,
-                "player_velocity_to_ball": player_to_ball, "boost": math.sqrt(car.boost / C.BOOST_MAX)}

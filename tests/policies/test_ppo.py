@@ -20,7 +20,7 @@ from rocketdrl_ma.policies.ppo import load_model, train, validate_train_config
 from rocketdrl_ma.policies.ppo.envs import EnvPool
 from rocketdrl_ma.policies.ppo.evaluate import evaluate
 from rocketdrl_ma.policies.ppo.model import PPOModel
-from rocketdrl_ma.policies.ppo.shaping import potential
+from rocketdrl_ma.rules.rewards import BallToGoalDistance, CarToBallDistance
 from rocketdrl_ma.policies.ppo.trainer import make_loss, ppo_update
 from rocketdrl_ma.policies.base import ObservingPolicy
 from rocketdrl_ma.policies.registry import load_policy
@@ -140,7 +140,7 @@ def test_potential_shaping_follows_the_game_state():
     before = env.game_state
     step = pool.step(np.array([[1.0, 0.0, -1.0, 1.0, -1.0]]))  # full throttle and boost, towards the ball
     after = env.game_state
-    phi = [potential("blue_0", s, {"car_to_ball": 1.0, "ball_to_goal": 2.0}) for s in (before, after)]
+    phi = [CarToBallDistance().get("blue_0", s) + 2.0 * BallToGoalDistance().get("blue_0", s) for s in (before, after)]
     assert phi[0] == pytest.approx(-np.linalg.norm(before.ball.pos - before.cars["blue_0"].pos) / 1000.0
                                    - 2.0 * np.linalg.norm(before.ball.pos - [0.0, 5560.0, 321.3875]) / 1000.0)
     assert step.shaping[0] == pytest.approx(phi[1] - phi[0], rel=1e-5)

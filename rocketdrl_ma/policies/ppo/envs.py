@@ -20,7 +20,7 @@ from gymnasium import spaces
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.env.vector_env import VectorEnv
 
-from .shaping import potential
+from .shaping import make_shaping
 
 
 @dataclass
@@ -70,8 +70,7 @@ class EnvPool:
         self.seed = seed
         self._returns = np.zeros(self.n_rows)
         self._lengths = np.zeros(self.n_rows, dtype=np.int64)
-        self.shaping = dict(shaping or {})
-        self._phi = np.zeros(self.n_rows)
+        self.shaping = [make_shaping(shaping) for _ in self.envs] if shaping else []
         self.autoreset = autoreset
 
     def _rows(self, i: int) -> slice:
@@ -79,8 +78,8 @@ class EnvPool:
 
     def reset(self) -> np.ndarray:
         obs, _ = self.vec.reset(seed=self.seed)
-        for i, env in enumerate(self.envs):
-            self._phi[self._rows(i)] = self._potentials(env)
+        for i in range(len(self.envs)):
+            self._reset_shaping(i)
         self._returns[:] = 0.0
         self._lengths[:] = 0
         return obs.reshape(self.n_rows, -1)
@@ -96,12 +95,9 @@ class EnvPool:
         truncated = np.repeat(trunc & ~term, n_agents)
         final_obs = np.zeros_like(obs)
         shaping = np.zeros(self.n_rows, np.float32)
-        if self.shaping:
-            for i, env in enumerate(self.envs):
-                rows = self._rows(i)
-                phi = np.asarray(self._potentials(env))
-                shaping[rows] = phi - self._phi[rows]
-                self._phi[rows] = phi
+        for i, terms in enumerate(self.shaping):
+            state = self.envs[i].game_state
+            shaping[self._rows(i)] = [terms.get(agent, state)[0] for agent in self.agents]
         episodes: list[Episode] = []
         ended = term | trunc
         for i in np.flatnonzero(ended):
@@ -128,14 +124,12 @@ class EnvPool:
         for i in np.flatnonzero(ended):
             rows = self._rows(int(i))
             obs[rows] = new_obs[i]
-            self._phi[rows] = self._potentials(self.envs[int(i)])
+            self._reset_shaping(int(i))
         return obs
 
-    def _potentials(self, env: RocketDRLParallelEnv) -> list[float]:
-        if not self.shaping:
-            return [0.0] * len(self.agents)
-        state = env.game_state
-        return [potential(agent, state, self.shaping) for agent in self.agents]
+    def _reset_shaping(self, i: int) -> None:
+        if self.shaping:
+            self.shaping[i].reset(self.agents, self.envs[i].game_state)
 
     def set_difficulty(self, difficulty: float) -> None:
         """A minigame's difficulty knob in [0, 1] (from each copy's next round)."""

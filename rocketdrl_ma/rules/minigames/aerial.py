@@ -4,6 +4,7 @@ from __future__ import annotations
 from rocketdrl_ma.physics import BallState
 from rocketdrl_ma.physics import constants as C
 
+from .. import rewards
 from ..mutators import StateMutator
 from ..state import GameState
 from .shot import ShotMinigame, ShotSpawn, check_number, check_range
@@ -35,8 +36,8 @@ class Aerial(ShotMinigame):
     difficulty 1 (evaluation) the task is the seed's whatever these are. Unset, they equal the task's values.
     """
 
-    REWARD_TERMS = ShotMinigame.REWARD_TERMS + ("aerial_touch",)
-    DEFAULT_WEIGHTS = {**ShotMinigame.DEFAULT_WEIGHTS, "aerial_touch": 5.0}
+    REWARD_TERMS = {**ShotMinigame.REWARD_TERMS, "aerial_touch": rewards.AerialTouched}
+    DEFAULT_REWARD_WEIGHTS = {**ShotMinigame.DEFAULT_REWARD_WEIGHTS, "aerial_touch": 5.0}
 
     def __init__(self, ball_distance_min_uu: float = 1500.0, ball_distance_max_uu: float = 2500.0,
                  ball_x_range_uu: float = 800.0, ball_height_min_uu: float = 550.0,
@@ -60,7 +61,6 @@ class Aerial(ShotMinigame):
             check_number("easy_aerial_min_height_uu", easy_aerial_min_height_uu, 0.0, self.aerial_min_height_uu))
         self.aerial_done: dict[str, bool] = {}
         self.waiting_reset: dict[str, bool] = {}
-        self.aerial_touches_this_decision: list[str] = []
         self.aerial_height_needed_uu = self.aerial_min_height_uu  # the car's height for an aerial touch, this round
 
     def spawn_mutators(self) -> list[StateMutator]:
@@ -84,10 +84,6 @@ class Aerial(ShotMinigame):
         if self.release_after_s == 0.0:
             self.arena.ball.release()
 
-    def begin_decision(self, controls) -> None:
-        self.aerial_touches_this_decision = []
-        super().begin_decision(controls)
-
     def on_tick(self) -> None:
         if not self.ended:
             if self.arena.ball.is_frozen and self.round_time_s + self.arena.tick_time >= self.release_after_s - 1e-9:
@@ -104,7 +100,6 @@ class Aerial(ShotMinigame):
             return
         self.aerial_done[agent] = True
         self.stats[agent]["aerial_touches"] += 1
-        self.aerial_touches_this_decision.append(agent)
         self.events.append({"kind": "aerial_touch", "tick": self.arena.tick_count, "agent": agent,
                             "car_z_uu": round(float(car.pos[2]), 2)})
 
@@ -126,7 +121,3 @@ class Aerial(ShotMinigame):
 
     def scoreboard(self) -> dict:
         return {**super().scoreboard(), "aerial_touches": sum(s.get("aerial_touches", 0) for s in self.stats.values())}
-
-    def reward_terms(self, agent: str, state: GameState) -> dict[str, float]:
-        return {**super().reward_terms(agent, state),
-                "aerial_touch": float(self.aerial_touches_this_decision.count(agent))}

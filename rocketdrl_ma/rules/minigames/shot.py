@@ -17,9 +17,9 @@ The shooter (``blue_0``) attacks the orange goal at +y; a goalkeeper, if the min
 An episode is ``rounds`` rounds; after a round the next one spawns at once, and score, goals, misses and
 touches accumulate. There is always a timeout, so an episode cannot go on for ever.
 
-Reward terms (unweighted, per decision; ``rewards:`` in the YAML weights them, defaults in
-``DEFAULT_WEIGHTS``): ``goal`` 1 per goal this decision, ``miss`` 1 per miss, ``time`` 1 every decision.
-A goalkeeper gets each term negated, so with any weights its reward is the shooter's, negated.
+Reward terms (``rules/rewards.py``, unweighted, per decision; ``rewards:`` in the YAML weights them, defaults
+in ``DEFAULT_REWARD_WEIGHTS``): ``goal`` 1 per goal this decision, ``miss`` 1 per miss, ``time`` 1 every
+decision. A goalkeeper gets each term negated, so with any weights its reward is the shooter's, negated.
 """
 from __future__ import annotations
 
@@ -28,6 +28,7 @@ import numpy as np
 from rocketdrl_ma.physics import Arena, BallState, Car, CarState, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 
+from .. import rewards
 from ..base import Rules, ball_heading_into_goal
 from ..mutators import StateMutator
 from ..state import BLUE, ORANGE, GameState, agent_team
@@ -97,14 +98,17 @@ class ShotMinigame(Rules):
     1: the full ranges); ``set_difficulty`` changes it between episodes for curricula.
     """
 
-    REWARD_TERMS: tuple[str, ...] = ("goal", "miss", "time")
-    DEFAULT_WEIGHTS: dict[str, float] = {"goal": 10.0, "miss": -10.0, "time": -0.01}
+    # goal: +1 for the shooters' goal, -1 for the keeper's side (GoalScored is team-relative); miss and time are
+    # the shooters' terms, negated for the keeper: the duel is zero-sum.
+    REWARD_TERMS = {"goal": rewards.GoalScored, "miss": lambda: rewards.ShooterSide(rewards.RoundMissed()),
+                    "time": lambda: rewards.ShooterSide(rewards.DecisionPassed())}
+    DEFAULT_REWARD_WEIGHTS = {"goal": 10.0, "miss": -10.0, "time": -0.01}
     KEEPERS = 0  # orange goalkeepers (the competitive penalty has one)
 
     def __init__(self, rounds: int = 1, timeout_s: float = 10.0, difficulty: float = 1.0, miss_line_y: float = 0.0,
                  car_boost: float = 100.0, car_preset: str = "octane", reward_weights: dict[str, float] | None = None):
         super().__init__(blue_size=1, orange_size=self.KEEPERS, car_preset=car_preset,
-                         reward_weights={**self.DEFAULT_WEIGHTS, **(reward_weights or {})},
+                         reward_weights=reward_weights,
                          boost_pads=False, demos=False)
         if isinstance(rounds, bool) or not isinstance(rounds, int) or rounds < 1:
             raise ValueError(f"rounds: must be an int >= 1, got {rounds!r}")
@@ -157,7 +161,6 @@ class ShotMinigame(Rules):
         self.ended = False
         self.results = []
         self.stats = {agent: {"goals": 0, "touches": 0, "shots": 0, "saves": 0} for agent in self.cars}
-        self.outcomes_this_decision: list[str] = []
         self._seen = 0
         self._begin_round()
 
@@ -176,7 +179,6 @@ class ShotMinigame(Rules):
         self._begin_round()
 
     def begin_decision(self, controls) -> None:
-        self.outcomes_this_decision = []
         self._seen = 0
         super().begin_decision(controls)
 
@@ -235,7 +237,6 @@ class ShotMinigame(Rules):
         result = {"round": len(self.results) + 1, "outcome": outcome, "reason": reason,
                   "time_s": round(self.round_time_s, 4), "touches": self.round_touches}
         self.results.append(result)
-        self.outcomes_this_decision.append(outcome)
         if outcome == "goal":
             scorer = self.last_shooter_touch
             if scorer is not None:
@@ -282,8 +283,3 @@ class ShotMinigame(Rules):
         return {**board, "winner": "blue" if goals > misses else "orange" if misses > goals else None,
                 "time_to_goal_s": round(float(np.mean(goal_times)), 4) if goal_times else None,
                 "results": [dict(r) for r in self.results], "stats": {a: dict(s) for a, s in self.stats.items()}}
-
-    def reward_terms(self, agent: str, state: GameState) -> dict[str, float]:
-        sign = 1.0 if agent_team(agent) == BLUE else -1.0
-        return {"goal": sign * self.outcomes_this_decision.count("goal"),
-                "miss": sign * self.outcomes_this_decision.count("miss"), "time": sign}

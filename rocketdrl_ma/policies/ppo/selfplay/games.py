@@ -17,7 +17,7 @@ from gymnasium import spaces
 
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.ppo.envs import Episode, StepResult
-from rocketdrl_ma.policies.ppo.shaping import potential
+from rocketdrl_ma.policies.ppo.shaping import make_shaping
 from rocketdrl_ma.policies.scripted import make_scripted
 
 TEAMS = ("blue", "orange")
@@ -53,7 +53,7 @@ class SelfPlayGames:
         self.action_space: spaces.Space = first.action_space(first.possible_agents[0])
         self.seed = cfg["seed"] + first_copy
         self.first_copy = first_copy
-        self.shaping = dict(cfg["shaping"])
+        self.shaping = [make_shaping(cfg["shaping"]) for _ in self.envs] if cfg["shaping"] else []
         # one bot object per copy and name: a bot may remember the game it is playing
         self.scripted = [[make_scripted(bot) for bot in self.sp["scripted"]] for _ in self.envs]
         kickstart = self.sp["kickstart"]
@@ -65,7 +65,6 @@ class SelfPlayGames:
         self._obs = np.zeros((len(self.envs), len(self.agents)) + self.observation_space.shape, np.float32)
         self._returns = np.zeros(self.n_rows)
         self._lengths = np.zeros(self.n_rows, dtype=np.int64)
-        self._phi = np.zeros(self.n_rows)
 
     # ------------------------------------------------------------------ rows and sides
     def rows(self, i: int) -> slice:
@@ -89,7 +88,8 @@ class SelfPlayGames:
         self._episodes[i] += 1
         self.learner_team[i] = TEAMS[(self.first_copy + i + self._episodes[i]) % 2]
         self.opponent[i] = SELF
-        self._phi[self.rows(i)] = self._potentials(i)
+        if self.shaping:
+            self.shaping[i].reset(self.learners(i), self.envs[i].game_state)
 
     def begin_episodes(self, copies: np.ndarray, opponents: np.ndarray, generations: np.ndarray) -> None:
         """The opponent (index, slot generation) each of ``copies`` plays in the episode it has just begun."""
@@ -155,9 +155,8 @@ class SelfPlayGames:
                 if event.get("kind") == "goal":
                     goals[i, 0 if event["team"] == team else 1] += 1
             if self.shaping:
-                phi = np.asarray(self._potentials(i))
-                shaping[rows] = phi - self._phi[rows]
-                self._phi[rows] = phi
+                state = self.envs[i].game_state
+                shaping[rows] = [self.shaping[i].get(agent, state)[0] for agent in self.learners(i)]
             if ended[i]:
                 winner = infos[i][self.learners(i)[0]].get("summary", {}).get("winner")
                 points = 0.5 if winner is None else float(winner == team)
@@ -173,12 +172,6 @@ class SelfPlayGames:
         self._returns = np.where(done, 0.0, self._returns + reward)
         self._lengths = np.where(done, 0, self._lengths + 1)
         return StepResult(obs, reward, shaping, terminated, truncated, obs, episodes), results, goals
-
-    def _potentials(self, i: int) -> list[float]:
-        if not self.shaping:
-            return [0.0] * self.team_size
-        state = self.envs[i].game_state
-        return [potential(agent, state, self.shaping) for agent in self.learners(i)]
 
     def close(self) -> None:
         self.vec.close()
