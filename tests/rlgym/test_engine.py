@@ -17,7 +17,7 @@ from rocketdrl_ma.rlgym import HITBOX_PRESETS, RocketDRLEngine
 # as -2560.0002 there and exactly here, 4.1e-8 in DefaultObs' units (measured); nothing else differs.
 KICKOFF_OBS_ATOL = 1e-6
 # 1 s (15 actions of 8 ticks) of scripted controls from a 2v2 kickoff, max |obs difference| in DefaultObs units
-# over every agent, step and seed; measured: 4e-7, 0.0018, 0.0104, 0.198. The aerial's gap is the physics' air
+# over every agent, step and seed; measured: 1.5e-5, 0.0018, 0.0104, 0.198. The aerial's gap is the physics' air
 # control (README, Fidelity), not the engine.
 SCRIPTS = {
     "boost": (1e-3, lambda step, agent: controls(throttle=1, boost=1)),
@@ -404,3 +404,20 @@ def test_the_kickoff_mutators_run_unchanged():
     assert isinstance(state, GameState) and len(state.cars) == 6
     assert {car.team_num for car in state.cars.values()} == {0, 1}
     assert all(car.boost_amount == pytest.approx(33.3) for car in state.cars.values())
+
+
+def test_a_demolished_car_is_set_and_respawns_alike(engines):
+    demoed = new_car(0, (0, -2000, 17.01))
+    demoed.demo_respawn_timer = 0.5
+    logs = []
+    for engine in engines:
+        env = scene_env(engine, SceneMutator({"car": demoed}, (3000, 4000, 93.15)))
+        env.reset()
+        log = [(env.state.cars["car"].is_demoed, round(env.state.cars["car"].demo_respawn_timer, 3))]
+        for _ in range(10):
+            env.step({"car": controls()})
+            log.append((env.state.cars["car"].is_demoed, round(env.state.cars["car"].demo_respawn_timer, 3)))
+        logs.append(log)
+    assert logs[0][0] == (True, 0.5)
+    assert logs[0] == logs[1]
+    assert logs[0][-1] == (False, 0.0)
