@@ -13,7 +13,8 @@ $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e '.[train,test,web,cluster]'
+	$(PY) -m pip install --quiet -e '.[train,test,web,cluster,rlgym]'
+	$(PY) -m pip install --quiet --no-deps rlgym-rocket-league==2.0.1  # its numpy<2 pin is stale (README, For RLGym users)
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -112,7 +112,9 @@ class Car:
         return CarExtraState(
             holding_jump=cs[CS_LAST_JUMP] > 0.5, boost_active_time_s=cs[CS_BOOSTING_TIME],
             flip_torque=(cs[CS_FLIP_TORQUE_X], cs[CS_FLIP_TORQUE_Y], 0.0),
-            is_auto_flipping=cs[CS_IS_AUTOFLIPPING] > 0.5, auto_flip_timer_s=cs[CS_AUTOFLIP_TIMER],
+            # The kernel, as RocketSim, lets the timer run a fraction of a tick below 0 before it stops the
+            # auto-flip; at 0 the next tick stops it the same way.
+            is_auto_flipping=cs[CS_IS_AUTOFLIPPING] > 0.5, auto_flip_timer_s=max(cs[CS_AUTOFLIP_TIMER], 0.0),
             auto_flip_direction=cs[CS_AUTOFLIP_SCALE], car_contact_id=victim, car_contact_cooldown_s=cooldown)
 
     def set_extra_state(self, extra: CarExtraState) -> None:
