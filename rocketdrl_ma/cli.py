@@ -12,6 +12,11 @@ import argparse
 import importlib
 import sys
 
+from rocketdrl_ma.rules.events import GameEventKind, describe_event
+
+#: the events `play` prints as they happen
+SHOWN_EVENTS = (GameEventKind.GOAL, GameEventKind.DEMO, GameEventKind.SAVE, GameEventKind.OVERTIME)
+
 COMMAND_MODULES: tuple[str, ...] = ("rocketdrl_ma.commands.training", "rocketdrl_ma.commands.server",
                                     "rocketdrl_ma.commands.league", "rocketdrl_ma.commands.web")
 
@@ -40,8 +45,8 @@ def play(config: str, blue: str, orange: str, video: str | None, seed: int, cloc
                 env.render()
             info = next(iter(infos.values()))
             for event in info["events"]:
-                if event["kind"] in ("goal", "demo", "save", "overtime") and not quiet:
-                    tqdm.write(_describe(event, env.rules.arena.tick_rate))
+                if event.kind in SHOWN_EVENTS and not quiet:
+                    tqdm.write(describe_event(event, env.rules.arena.tick_rate))
             elapsed = clock - info["scoreboard"]["clock_s"] if not info["scoreboard"]["overtime"] else clock
             bar.update(max(elapsed - shown, 0.0))
             shown = max(shown, elapsed)
@@ -56,18 +61,6 @@ def play(config: str, blue: str, orange: str, video: str | None, seed: int, cloc
         for agent, stats in summary["stats"].items():
             print(f"  {agent:9s} " + "  ".join(f"{k} {v}" for k, v in stats.items()))
     return summary
-
-
-def _describe(event: dict, tick_rate: int) -> str:
-    t = event["tick"] / tick_rate
-    if event["kind"] == "goal":
-        who = event["scorer"] or "nobody"
-        return f"  {t:7.1f} s  GOAL {event['team']} ({who}{', own goal' if event['own_goal'] else ''})"
-    if event["kind"] == "demo":
-        return f"  {t:7.1f} s  demo: {event['agent']} destroyed {event['victim']}"
-    if event["kind"] == "save":
-        return f"  {t:7.1f} s  save by {event['agent']}"
-    return f"  {t:7.1f} s  overtime"
 
 
 def _run_play(args: argparse.Namespace) -> int:

@@ -176,8 +176,8 @@ class RocketDRLParallelEnv(ParallelEnv):
         info = flat_numbers(self.rules.scoreboard())
         counts = dict.fromkeys(COUNTED_EVENTS, 0.0)
         for event in state.events:
-            if event["kind"] in counts and agent in (event.get("agent"), event.get("scorer")):
-                counts[event["kind"]] += 1.0
+            if event.kind in counts and event.credited_to == agent:
+                counts[event.kind] += 1.0
         info.update(counts)
         info.update({f"reward_{term}": value for term, value in reward_terms.items()})
         return info

@@ -34,6 +34,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import BallState, CarConfig, CarControls, CarState
 from rocketdrl_ma.physics.car_config import WheelPair
+from rocketdrl_ma.rules.events import events_from_dicts
 from rocketdrl_ma.rules.state import GameState, Obstacle
 
 FORMAT_VERSION = 1
@@ -124,7 +125,7 @@ class ReplayWriter:
             ball=dataclasses.replace(state.ball),
             pad_timers=np.array(state.pad_timers, dtype=np.float64),
             last_controls=dict(state.last_controls),
-            events=json.loads(json.dumps(list(state.events), default=_json_default)),
+            events=list(state.events),  # typed events are frozen: nothing to snapshot
             car_configs=dict(state.car_configs),
         ))
 
@@ -160,7 +161,8 @@ class ReplayWriter:
             "obstacle_count": np.array([len(s.obstacles) for s in states], dtype=np.int64).reshape(T),
             "obstacle_center": np.zeros((T, K, 3), dtype=np.float64),
             "obstacle_half_extents": np.zeros((T, K, 3), dtype=np.float64),
-            "events_json": np.asarray([json.dumps(s.events) for s in states], dtype=str).reshape(T),
+            "events_json": np.asarray([json.dumps([e.as_dict() for e in s.events], default=_json_default)
+                                       for s in states], dtype=str).reshape(T),
         }
         template = _car_value_array  # shapes and dtypes come from a default CarState
         default_car = CarState()
@@ -289,7 +291,7 @@ class Replay:
             pad_timers=a["pad_timers"][i].copy(), last_controls=controls,
             score=(int(a["score"][i, 0]), int(a["score"][i, 1])), clock_s=float(a["clock_s"][i]),
             is_overtime=bool(a["is_overtime"][i]), kickoff_pending=bool(a["kickoff_pending"][i]),
-            last_touch=touch or None, obstacles=obstacles, events=json.loads(str(a["events_json"][i])),
+            last_touch=touch or None, obstacles=obstacles, events=events_from_dicts(json.loads(str(a["events_json"][i]))),
             car_configs=configs)
 
 

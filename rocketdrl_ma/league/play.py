@@ -12,7 +12,6 @@ from .config import LeagueConfig
 from .schedule import ScheduledMatch
 
 TEAMS = ("blue", "orange")
-ENDED = ("finished", "stopped", "failed")
 
 
 def slot_players(cfg: LeagueConfig, match: ScheduledMatch) -> dict[str, tuple[str, str | None]]:
@@ -66,6 +65,7 @@ def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session, client=Non
     server's name, unauthenticated, its key and admin secret from its key dir on this machine)."""
     from rocketdrl_ma.server.bot import PolicyBot
     from rocketdrl_ma.server.client import LobbyClient, resolve_client
+    from rocketdrl_ma.server.protocol import ENDED_STATUSES, MatchStatus
 
     from .remote import invite
 
@@ -105,12 +105,12 @@ def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session, client=Non
     for t in threads:
         t.join()
     info = lobby.inspect(match_id)
-    while info["status"] not in ENDED:
+    while info["status"] not in ENDED_STATUSES:
         time.sleep(0.2)
         info = lobby.inspect(match_id)
     if errors:
         raise RuntimeError(f"match {match.key}: a local bot failed on the server: {errors[0]!r}")
-    if info["status"] != "finished":
+    if info["status"] != MatchStatus.FINISHED:
         raise RuntimeError(f"match {match.key}: server match {match_id} ended {info['status']} ({info.get('error')})")
     not_joined = [s for s, st in info["slot_status"].items() if st["occupant"] != "remote"]
     if not_joined:

@@ -15,6 +15,7 @@ import numpy as np
 from rocketdrl_ma.physics import Arena, Car, CarControls, DemoMode, MutatorConfig, PhysicsEvent, PhysicsEventKind
 from rocketdrl_ma.physics import constants as C
 
+from . import events as game_events
 from .mutators import KickoffMutator, StateMutator
 from .rewards import CombinedReward, TermMakers
 from .state import GameState, Obstacle, agent_names, agent_team
@@ -61,7 +62,7 @@ class Rules(ABC):
         self.arena: Arena | None = None
         self.cars: dict[str, Car] = {}
         self.obstacles: tuple[Obstacle, ...] = ()
-        self.events: list[dict] = []
+        self.events: list[game_events.GameEvent] = []
         self.last_touch: str | None = None
         self._touching: set[str] = set()  # agents in contact with the ball on the last tick
         self.last_controls: dict[str, CarControls] = {}
@@ -187,13 +188,13 @@ class Rules(ABC):
                     touching.add(agent)
                     self.last_touch = agent
                     if agent not in self._touching:
-                        self.events.append({"kind": "touch", "tick": tick, "agent": agent})
-            elif kind is PhysicsEventKind.DEMO or kind is PhysicsEventKind.BUMP:
-                self.events.append({"kind": kind.value, "tick": tick, "agent": agent_of[event.attacker_id],
-                                    "victim": agent_of[event.victim_id]})
+                        self.events.append(game_events.Touch(tick, agent))
+            elif kind is PhysicsEventKind.DEMO:
+                self.events.append(game_events.Demo(tick, agent_of[event.attacker_id], agent_of[event.victim_id]))
+            elif kind is PhysicsEventKind.BUMP:
+                self.events.append(game_events.Bump(tick, agent_of[event.attacker_id], agent_of[event.victim_id]))
             elif kind is PhysicsEventKind.BOOST_PICKUP:
-                self.events.append({"kind": "boost_pickup", "tick": tick, "agent": agent_of[event.car_id],
-                                    "pad": event.pad_index})
+                self.events.append(game_events.BoostPickup(tick, agent_of[event.car_id], int(event.pad_index)))
         self._touching = touching
 
     def game_state(self) -> GameState:

@@ -5,6 +5,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import constants as C
 
+from . import events as game_events
 from . import rewards
 from .base import Rules, ball_heading_into_goal
 from .mutators import KickoffMutator
@@ -84,7 +85,7 @@ class Match(Rules):
         if not self.overtime and self.clock_s <= 0.0:
             if self.score[BLUE] == self.score[ORANGE]:
                 self.overtime = True
-                self.events.append({"kind": "overtime", "tick": self.arena.tick_count})
+                self.events.append(game_events.Overtime(self.arena.tick_count))
             elif ball_pos[2] <= BALL_ON_GROUND_Z:
                 self.ended = True  # zero-second rule: the match ends once the ball touches the ground
 
@@ -97,19 +98,19 @@ class Match(Rules):
             return
         new_events = self.events[self._classified:]
         for event in new_events:
-            agent = event.get("agent")
-            if event["kind"] == "touch":
+            if isinstance(event, game_events.Touch):
+                agent = event.agent
                 self.stats[agent]["touches"] += 1
                 sign = opponent_goal_sign(agent_team(agent))
                 if ball_heading_into_goal(ball_pos, ball_vel, sign):
-                    self.events.append({"kind": "shot", "tick": event["tick"], "agent": agent})
+                    self.events.append(game_events.Shot(event.tick, agent))
                     self.stats[agent]["shots"] += 1
                 if (prev is not None and ball_heading_into_goal(prev[0], prev[1], -sign)
                         and not ball_heading_into_goal(ball_pos, ball_vel, -sign)):
-                    self.events.append({"kind": "save", "tick": event["tick"], "agent": agent})
+                    self.events.append(game_events.Save(event.tick, agent))
                     self.stats[agent]["saves"] += 1
-            elif event["kind"] == "demo":
-                self.stats[agent]["demos"] += 1
+            elif isinstance(event, game_events.Demo):
+                self.stats[event.agent]["demos"] += 1
         self._classified = len(self.events)
 
     def begin_decision(self, controls) -> None:
@@ -123,8 +124,7 @@ class Match(Rules):
         own_goal = scorer is not None and agent_team(scorer) != team
         if scorer is not None and not own_goal:
             self.stats[scorer]["goals"] += 1
-        self.events.append({"kind": "goal", "tick": self.arena.tick_count, "team": TEAM_NAMES[team],
-                            "scorer": scorer, "own_goal": own_goal})
+        self.events.append(game_events.Goal(self.arena.tick_count, TEAM_NAMES[team], scorer, own_goal))
         if self.overtime or (self.clock_s <= 0.0):
             self.ended = True
             return

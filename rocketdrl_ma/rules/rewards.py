@@ -22,6 +22,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import constants as C
 
+from . import events as game_events
 from .state import ATTACKED_GOAL_CENTER, BLUE, TEAM_NAMES, GameState, agent_team
 
 #: distances in shaping potentials are in units of this many uu
@@ -45,8 +46,8 @@ class RewardTerm(ABC):
 
 
 # ------------------------------------------------------------------------------------------------- events
-def _events(state: GameState, kind: str) -> list[dict]:
-    return [event for event in state.events if event["kind"] == kind]
+def _events(state: GameState, kind: type[game_events.GameEvent]) -> list:
+    return [event for event in state.events if isinstance(event, kind)]
 
 
 class GoalScored(RewardTerm):
@@ -54,28 +55,28 @@ class GoalScored(RewardTerm):
 
     def get(self, agent: str, state: GameState) -> float:
         team = TEAM_NAMES[agent_team(agent)]
-        return float(sum(1.0 if event["team"] == team else -1.0 for event in _events(state, "goal")))
+        return float(sum(1.0 if event.team == team else -1.0 for event in _events(state, game_events.Goal)))
 
 
 class BallTouched(RewardTerm):
     """1 if the agent's car started a touch of the ball this decision."""
 
     def get(self, agent: str, state: GameState) -> float:
-        return float(any(event["agent"] == agent for event in _events(state, "touch")))
+        return float(any(event.agent == agent for event in _events(state, game_events.Touch)))
 
 
 class AerialTouched(RewardTerm):
     """The agent's aerial touches this decision (Aerial's ``aerial_touch`` events)."""
 
     def get(self, agent: str, state: GameState) -> float:
-        return float(sum(event["agent"] == agent for event in _events(state, "aerial_touch")))
+        return float(sum(event.agent == agent for event in _events(state, game_events.AerialTouch)))
 
 
 class RoundMissed(RewardTerm):
     """Rounds of a shooting minigame that ended in a miss this decision."""
 
     def get(self, agent: str, state: GameState) -> float:
-        return float(len(_events(state, "miss")))
+        return float(len(_events(state, game_events.Miss)))
 
 
 class DecisionPassed(RewardTerm):

@@ -9,6 +9,8 @@ import numpy as np
 from rocketdrl_ma.physics import BallState, CarConfig, CarControls, CarState
 from rocketdrl_ma.physics import constants as C
 
+from .events import GameEvent
+
 BLUE, ORANGE = 0, 1
 TEAM_NAMES = ("blue", "orange")
 #: The centre of the goal each team attacks (blue attacks +y), in uu: the target of the goal-directed reward and
@@ -52,6 +54,6 @@ class GameState:
     kickoff_pending: bool = False  # the kickoff countdown is running: cars are frozen
     last_touch: str | None = None  # agent who touched the ball last
     obstacles: tuple[Obstacle, ...] = ()
-    events: list[dict] = field(default_factory=list)  # this decision's events, in tick order
+    events: list[GameEvent] = field(default_factory=list)  # this decision's events, in tick order
     car_configs: dict[str, CarConfig] = field(default_factory=dict)  # hitbox preset of each car
     mode_state: dict = field(default_factory=dict)  # a game mode's own flags its sensors read (minigames)

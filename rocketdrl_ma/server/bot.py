@@ -30,7 +30,7 @@ import numpy as np
 
 from .client import (JoinInfo, LobbyClient, SealedStream, ServerError, ServerGone, parse_rejoin_token,
                      resolve_client)
-from .protocol import action_message, decode_state
+from .protocol import ENDED_STATUSES, MatchStatus, ProtocolError, action_message, decode_events, decode_state
 from .settings import DEFAULT_ENDPOINT, ClientSettings, ZenohSettings
 
 log = logging.getLogger(__name__)
@@ -113,7 +113,7 @@ class Bot:
 
     def act(self, obs: np.ndarray, info: dict) -> Any:
         """This decision's action. ``info``: ``agent`` (the slot), ``decision``, ``reward`` (since the last
-        decision), ``scoreboard``, ``events``, ``state`` (a ``GameState`` or None), ``done`` (False)."""
+        decision), ``scoreboard``, ``events`` (typed: ``rocketdrl_ma.rules.events``), ``state`` (a ``GameState`` or None), ``done`` (False)."""
         raise NotImplementedError
 
     def on_end(self, info: dict) -> None:
@@ -204,19 +204,23 @@ class Bot:
                     try:
                         info = lobby.inspect(join.match)
                     except ServerError:  # the server no longer knows the match: long over
-                        info = {"status": "finished", "instance": join.instance}
-                    if info.get("instance") != join.instance or info["status"] in ("finished", "stopped", "failed"):
+                        info = {"status": MatchStatus.FINISHED, "instance": join.instance}
+                    if info.get("instance") != join.instance or info["status"] in ENDED_STATUSES:
                         report.summary, report.reason = info.get("summary"), info["status"]
                         self.on_end({"agent": join.slot, "done": True, "summary": report.summary,
                                      "reason": report.reason, "state": None})
                         return
                 continue
             last_message = time.monotonic()
-            info = {"agent": join.slot, "decision": body["decision"], "reward": body["reward"],
-                    "scoreboard": body["scoreboard"], "events": body["events"], "done": body["done"],
-                    "state": decode_state(body["state"]) if "state" in body else None}
+            try:
+                info = {"agent": join.slot, "decision": body["decision"], "reward": body["reward"],
+                        "scoreboard": body["scoreboard"], "events": decode_events(body["events"]),
+                        "done": body["done"], "state": decode_state(body["state"]) if "state" in body else None}
+            except ProtocolError:  # signed by the server, yet not a message this version can read
+                report.dropped["malformed"] += 1
+                continue
             if body["done"]:
-                report.summary, report.reason = body.get("summary"), body.get("reason", "finished")
+                report.summary, report.reason = body.get("summary"), body.get("reason", MatchStatus.FINISHED)
                 info.update(summary=report.summary, reason=report.reason)
                 self.on_end(info)
                 return

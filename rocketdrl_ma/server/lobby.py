@@ -26,8 +26,9 @@ from rocketdrl_ma.results import MatchResult, ResultsStore
 
 from .access import acl_config, read_users_file
 from .crypto import NONCE_BYTES, ServerIdentity, load_or_create_secret, random_bytes, request_mac, same_mac
-from .match import ENDED, INTERNAL_ERROR, JoinRequest, MatchRunner
-from .protocol import MAX_REQUEST_BYTES, Keys, ProtocolError, check_name, pack, seal, unpack, unpack_map
+from .match import INTERNAL_ERROR, JoinRequest, MatchRunner
+from .protocol import (ENDED_STATUSES, MAX_REQUEST_BYTES, Keys, ProtocolError, check_name, pack, seal, unpack,
+                       unpack_map)
 from .settings import SERVER_USER, MatchOptions, ServerSettings
 
 log = logging.getLogger(__name__)
@@ -219,7 +220,7 @@ class MatchServer:
 
     def _forget_old(self) -> None:
         """Keep at most ``max_finished_kept`` ended matches in memory (their results are in the store)."""
-        ended = [m for m in self.matches.values() if m.status in ENDED]
+        ended = [m for m in self.matches.values() if m.status in ENDED_STATUSES]
         for match in ended[:max(0, len(ended) - self.settings.max_finished_kept + 1)]:
             del self.matches[match.id]
 

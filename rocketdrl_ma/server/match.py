@@ -26,16 +26,16 @@ from rocketdrl_ma.env.actions import make_action_parser
 from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.results import MatchResult
+from rocketdrl_ma.rules.events import GameEvent, Goal
 
 from .crypto import KeyExchange, ServerIdentity, action_mac, random_bytes, same_mac
-from .protocol import (Keys, ProtocolError, VersionError, encode_space, encode_state, pack_value, seal,
+from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state, pack_value, seal,
                        split_action, unpack_map)
 from .settings import MatchOptions
 from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations
 
 log = logging.getLogger(__name__)
 REALTIME_TICK_HZ = 120.0
-ENDED = ("finished", "stopped", "failed")  # a match is waiting, then running, then one of these
 INTERNAL_ERROR = "internal error (details in the server's log)"
 _MAX_SPEC_NAME = 64
 
@@ -98,7 +98,7 @@ class MatchRunner:
         self.env.obs_builder = self._obs
         self.env.action_parser = ControlsPassThrough(self._match_parser)
         self._fill: dict[str, Any] = {}
-        self.status = "waiting"
+        self.status = MatchStatus.WAITING
         self.instance = uuid.uuid4().hex  # tells this match from an earlier one of the same id
         self.created_at = time.time()
         self.started_at: float | None = None
@@ -127,7 +127,7 @@ class MatchRunner:
 
     @property
     def live(self) -> bool:
-        return self.status not in ENDED
+        return self.status not in ENDED_STATUSES
 
     # ------------------------------------------------------------------------------------------ lobby side
     def join(self, request: JoinRequest) -> dict:
@@ -141,7 +141,7 @@ class MatchRunner:
         wanted = self._slot_arg(args, required=False)
         exchange = KeyExchange()
         with self._cond:
-            if self.status != "waiting":
+            if self.status != MatchStatus.WAITING:
                 raise ValueError(f"match {self.id!r} is {self.status}; only its own bots can rejoin (op rejoin)")
             open_slots = [s for s in self.slots.values() if s.occupant == "open"]
             if wanted is not None:
@@ -236,7 +236,7 @@ class MatchRunner:
     def leave(self, request: JoinRequest) -> dict:
         with self._cond:
             slot = self._own_slot(request)
-            if self.status == "waiting":
+            if self.status == MatchStatus.WAITING:
                 slot.release()
                 self._act_subs.pop(slot.name).undeclare()
             else:  # mid-match the seat stays, played by replacement actions; the secret stops working
@@ -357,14 +357,14 @@ class MatchRunner:
         try:
             self._wait_until_ready()
             if self._stop.is_set():
-                self._end("stopped")
+                self._end(MatchStatus.STOPPED)
                 return
             self._play()
-            self._end("stopped" if self._stop.is_set() else "finished")
+            self._end(MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED)
         except Exception as e:  # a bug must not take the server down: the match fails, others go on
             log.error("match %s failed (%s: %s):\n%s", self.id, type(e).__name__, e, traceback.format_exc())
             self.error = INTERNAL_ERROR  # clients learn that it failed, the log says why
-            self._end("failed")
+            self._end(MatchStatus.FAILED)
 
     def _wait_until_ready(self) -> None:
         deadline = self.created_at + self.options.ready_timeout_s
@@ -379,7 +379,7 @@ class MatchRunner:
             for slot in self.slots.values():
                 if slot.occupant == "open":
                     slot.occupant, slot.bot = "fill", self.options.fill
-            self.status = "running"
+            self.status = MatchStatus.RUNNING
             self.started_at = time.time()
         from rocketdrl_ma.policies.registry import load_policy
         for slot in self.slots.values():
@@ -399,11 +399,11 @@ class MatchRunner:
     def _replacement(self, slot: Slot) -> CarControls:
         return slot.last_controls if self.options.replacement == "repeat" else NEUTRAL
 
-    def _count_events(self, events: list[dict]) -> None:
+    def _count_events(self, events: list[GameEvent]) -> None:
         for event in events:
-            self._event_counts[event["kind"]] += 1
-            if event["kind"] == "goal":
-                self._goals.append({k: event.get(k) for k in ("tick", "team", "scorer", "own_goal")})
+            self._event_counts[event.kind.value] += 1
+            if isinstance(event, Goal):
+                self._goals.append({k: v for k, v in event.as_dict().items() if k != "kind"})
 
     def _play(self) -> None:
         env = self.env
@@ -458,7 +458,7 @@ class MatchRunner:
         tick, next_t = 0, time.perf_counter()
         fill: dict[str, CarControls] = {}
         acc_rewards = dict.fromkeys(self.slots, 0.0)
-        events: list[dict] = []
+        events: list[GameEvent] = []
         last_decision_t = next_t
         while env.agents and not self._stop.is_set():
             if tick % self.decision_ticks == 0:
@@ -508,7 +508,7 @@ class MatchRunner:
             return {n: s.public() for n, s in self.slots.items()}
 
     def _publish(self, observations: dict, rewards: dict, state, done: bool, events: list | None = None) -> None:
-        events = list(state.events) if events is None else events
+        events = [event.as_dict() for event in (state.events if events is None else events)]
         self.scoreboard = self.env.rules.scoreboard()
         state_bytes = pack_value(encode_state(state))
         decision = self.decision
@@ -520,7 +520,7 @@ class MatchRunner:
             message = {"kind": "obs", **common, "slot": name, "reward": float(rewards.get(name, 0.0)),
                        "events": events, "obs": observations.get(name, np.zeros(0, np.float32))}
             if done:
-                message.update(summary=summary, reason="stopped" if self._stop.is_set() else "finished")
+                message.update(summary=summary, reason=MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED)
             raw = {"state": state_bytes} if slot.with_state else {}
             self._put(name, self._seal(message, raw), final=done)
         self._publishers["state"].put(self._seal({"kind": "state", **common, "status": self.status,
@@ -547,7 +547,7 @@ class MatchRunner:
     def _end(self, status: str) -> None:
         rules = self.env.rules
         summary = None
-        if status == "finished":
+        if status == MatchStatus.FINISHED:
             summary = rules.summary()
             state = self._obs.state
             slots = {n: s.public() for n, s in self.slots.items()}

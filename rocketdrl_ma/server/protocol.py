@@ -29,6 +29,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+from enum import StrEnum
 from typing import Any
 
 import msgpack
@@ -36,6 +37,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import PRESETS, BallState, CarConfig, CarControls, CarState
 from rocketdrl_ma.physics.car_config import WheelPair
+from rocketdrl_ma.rules.events import GameEvent, events_from_dicts
 from rocketdrl_ma.rules.state import GameState, Obstacle
 
 from .crypto import MAC_BYTES, ServerIdentity, ServerKey, action_mac
@@ -50,6 +52,19 @@ _NAME = re.compile(r"^[A-Za-z0-9_\-]{1,64}$")
 _ND_KINDS = "biuf"  # bool, signed, unsigned, float: never objects, strings or void
 _CAR_FIELDS = tuple(f.name for f in dataclasses.fields(CarState))
 _CONTROL_FIELDS = tuple(f.name for f in dataclasses.fields(CarControls))
+
+
+class MatchStatus(StrEnum):
+    """A match is waiting (for its bots), then running, then finished, stopped (by an admin or the server) or
+    failed (an internal error). On the wire, the plain string."""
+    WAITING = "waiting"
+    RUNNING = "running"
+    FINISHED = "finished"
+    STOPPED = "stopped"
+    FAILED = "failed"
+
+
+ENDED_STATUSES = frozenset({MatchStatus.FINISHED, MatchStatus.STOPPED, MatchStatus.FAILED})
 
 
 class ProtocolError(ValueError):
@@ -280,10 +295,19 @@ def encode_state(state: GameState) -> dict:
         "score": list(state.score), "clock_s": state.clock_s, "is_overtime": state.is_overtime,
         "kickoff_pending": state.kickoff_pending, "last_touch": state.last_touch,
         "obstacles": [[np.asarray(o.center), np.asarray(o.half_extents)] for o in state.obstacles],
-        "events": state.events,
+        "events": [event.as_dict() for event in state.events],
         "car_configs": {agent: _config_to_wire(c) for agent, c in state.car_configs.items()},
         "mode_state": state.mode_state,
     }
+
+
+def decode_events(events: Any) -> list[GameEvent]:
+    """Typed events from their wire maps; kinds this version does not know are left out (a newer server may send
+    more), a known kind with a bad field is a ProtocolError."""
+    try:
+        return events_from_dicts(events)
+    except (TypeError, ValueError) as e:
+        raise ProtocolError(str(e)) from None
 
 
 def decode_state(d: Any) -> GameState:
@@ -304,7 +328,7 @@ def decode_state(d: Any) -> GameState:
             last_touch=d["last_touch"],
             obstacles=tuple(Obstacle(np.asarray(c, dtype=np.float64), np.asarray(h, dtype=np.float64))
                             for c, h in d["obstacles"]),
-            events=list(d["events"]),
+            events=decode_events(d["events"]),
             car_configs={agent: _config_from_wire(c) for agent, c in d["car_configs"].items()},
             mode_state=dict(d["mode_state"]))
     except ProtocolError:

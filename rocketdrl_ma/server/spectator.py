@@ -18,13 +18,13 @@ from collections import Counter
 from dataclasses import dataclass
 from typing import Any, Iterator, Union
 
+from rocketdrl_ma.rules.events import GameEvent
 from rocketdrl_ma.rules.state import GameState
 
 from .client import LobbyClient, SealedStream, ServerError, resolve_client
-from .protocol import Keys, decode_state
+from .protocol import ENDED_STATUSES, Keys, MatchStatus, ProtocolError, decode_events, decode_state
 from .settings import ClientSettings
 
-ENDED = ("finished", "stopped", "failed")
 #: after the end-of-match message, how long to wait for a last state still on its way
 FINAL_GRACE_S = 0.5
 
@@ -48,11 +48,11 @@ class StateUpdate:
 
 @dataclass(frozen=True)
 class EventsUpdate:
-    """The events of one decision (each a dict with ``kind``, ``tick`` and the kind's fields)."""
+    """The events of one decision, typed (``rocketdrl_ma.rules.events``)."""
     match: str
     decision: int
     seq: int
-    events: list
+    events: list[GameEvent]
 
 
 @dataclass(frozen=True)
@@ -117,7 +117,12 @@ class Spectator:
                     self._queue.put(MatchEnd(self.match, body["decision"], body["status"], body.get("summary"),
                                              body.get("result_key"), body.get("error")))
                 else:
-                    self._queue.put(EventsUpdate(self.match, body["decision"], body["seq"], body["events"]))
+                    try:
+                        decoded = decode_events(body["events"])
+                    except ProtocolError:  # signed by the server yet not events this version can read
+                        self.dropped["malformed"] += 1
+                        return
+                    self._queue.put(EventsUpdate(self.match, body["decision"], body["seq"], decoded))
 
             def on_server(sample) -> None:
                 if sample.kind == SampleKind.DELETE:
@@ -155,8 +160,8 @@ class Spectator:
         try:
             info = self.lobby.inspect(self.match)
         except ServerError:
-            info = {"status": "finished", "instance": None}
-        if info.get("instance") != self.info["instance"] or info["status"] in ENDED:
+            info = {"status": MatchStatus.FINISHED, "instance": None}
+        if info.get("instance") != self.info["instance"] or info["status"] in ENDED_STATUSES:
             return MatchEnd(self.match, info.get("decision", -1), info["status"], info.get("summary"),
                             info.get("result_key"), info.get("error"))
         return None

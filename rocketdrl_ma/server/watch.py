@@ -7,20 +7,13 @@ import os
 import tempfile
 from typing import Any
 
+from rocketdrl_ma.rules.events import GameEventKind, describe_event
+
+from .protocol import ENDED_STATUSES
 from .settings import ClientSettings
 from .spectator import EventsUpdate, MatchEnd, Spectator, StateUpdate
 
-SHOWN_EVENTS = ("goal", "save", "demo", "shot")
-
-
-def describe_event(event: dict, tick_rate: int = 120) -> str:
-    t = event.get("tick", 0) / tick_rate
-    kind = event["kind"]
-    if kind == "goal":
-        return f"{t:6.1f} s  GOAL {event.get('team')} ({event.get('scorer') or 'nobody'})"
-    if kind == "demo":
-        return f"{t:6.1f} s  demo: {event.get('agent')} destroyed {event.get('victim')}"
-    return f"{t:6.1f} s  {kind} by {event.get('agent')}"
+SHOWN_EVENTS = (GameEventKind.GOAL, GameEventKind.SAVE, GameEventKind.DEMO, GameEventKind.SHOT)
 
 
 def scoreboard(match: str, message: StateUpdate | None, recent: list[str]):
@@ -64,7 +57,7 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
     try:
         with Spectator(match, client=client, **client_fields) as spectator:
             info = spectator.info
-            if info["status"] in ("finished", "stopped", "failed"):
+            if info["status"] in ENDED_STATUSES:
                 raise ValueError(f"match: {match!r} already {info['status']} (result {info.get('result_key')})")
             if video and not replay_path:
                 tmp_dir = tempfile.mkdtemp(prefix="rocketdrl-watch-")
@@ -84,7 +77,7 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
                         if writer is not None:
                             writer.add(update.state)
                     elif isinstance(update, EventsUpdate):
-                        recent += [describe_event(e) for e in update.events if e["kind"] in SHOWN_EVENTS]
+                        recent += [describe_event(e) for e in update.events if e.kind in SHOWN_EVENTS]
                     else:
                         final = update
                     view.update(scoreboard(match, latest, recent), refresh=True)

@@ -26,16 +26,17 @@ from pathlib import Path
 from typing import Callable
 
 from rocketdrl_ma.config import REPO_ROOT
+from rocketdrl_ma.rules.events import GameEvent
+from rocketdrl_ma.server.protocol import ENDED_STATUSES
 
 from .arena import arena_json
 from .feed import SOURCE_KINDS, FeedUpdate, Follower, SpectatorFeed
-from .frames import frame, pack_message, roster
+from .frames import feed_events, frame, pack_message, roster
 from .replays import ReplayLibrary
 
 log = logging.getLogger(__name__)
 STATIC_DIR = Path(__file__).parent / "static"
 MAX_STATES_PER_S = 30.0
-ENDED_STATUSES = ("finished", "stopped", "failed")
 MAX_REQUEST_BYTES = 64 * 1024
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                  ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
@@ -235,7 +236,7 @@ class PageServer:
         period = 1.0 / self.max_rate
         agents: list[str] | None = None
         shown: tuple | None = None
-        events: list[dict] = []
+        events: list[GameEvent] = []
         last_sent: float | None = None
         try:
             await ws.send(pack_message({"type": "watching", "kind": kind, "id": source_id}))
@@ -269,7 +270,7 @@ class PageServer:
                     await ws.send(payload)
                 if update.final is not None:
                     final = {k: update.final.get(k) for k in ("status", "summary", "result_key", "info", "error")}
-                    await ws.send(pack_message({"type": "final", "events": events, **final}))
+                    await ws.send(pack_message({"type": "final", "events": feed_events(events), **final}))
                     events = []
                     if kind == "match":
                         return

@@ -13,9 +13,10 @@ import threading
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from rocketdrl_ma.rules.events import GameEvent
 from rocketdrl_ma.rules.state import GameState
 from rocketdrl_ma.server.client import LobbyClient, SealedStream, ServerError, ServerGone
-from rocketdrl_ma.server.protocol import Keys, ProtocolError, check_name, decode_state, unpack
+from rocketdrl_ma.server.protocol import Keys, MatchStatus, ProtocolError, check_name, decode_events, decode_state, unpack
 from rocketdrl_ma.server.settings import ZenohSettings
 
 from .training import TrainingKeys
@@ -57,7 +58,7 @@ class LiveState:
 class FeedUpdate:
     """What arrived since the last poll: the newest state (or None), every event, the final message."""
     state: LiveState | None
-    events: list[dict]
+    events: list[GameEvent]
     final: dict | None
     errors: int  # payloads that did not decode (dropped)
 
@@ -97,7 +98,7 @@ class Follower:
             try:
                 slots = message.get("slots") or {}
                 state = LiveState(decode_state(message["state"]), dict(message.get("scoreboard") or {}),
-                                  str(message.get("status", "running")), int(message.get("decision", 0)),
+                                  str(message.get("status", MatchStatus.RUNNING)), int(message.get("decision", 0)),
                                   {slot: str(s.get("bot") or s.get("occupant") or slot) for slot, s in slots.items()
                                    if isinstance(s, dict)},
                                   dict(message.get("info") or {}))
@@ -111,7 +112,10 @@ class Follower:
                 continue
             if message.get("final"):
                 final = message
-            events += [e for e in message.get("events") or () if isinstance(e, dict)]
+            try:
+                events += decode_events(message.get("events") or ())
+            except ProtocolError:
+                errors += 1
         return FeedUpdate(state, events, final, errors)
 
     def close(self) -> None:

@@ -25,6 +25,7 @@ import msgpack
 import numpy as np
 
 from rocketdrl_ma.physics import PRESETS
+from rocketdrl_ma.rules.events import GameEvent, GameEventKind
 from rocketdrl_ma.rules.state import GameState, agent_team
 
 FLAG_DEMOED = 1
@@ -33,10 +34,8 @@ FLAG_SUPERSONIC = 4
 FLAG_ON_GROUND = 8
 FLAG_IN_AIR_MOVE = 16  # jumping or flipping
 #: event kinds the page's feed shows, and the fields each keeps
-FEED_EVENTS: dict[str, tuple[str, ...]] = {
-    "goal": ("team", "scorer", "own_goal"), "save": ("agent",), "demo": ("agent", "victim"),
-    "shot": ("agent",), "overtime": (), "miss": ("reason",),
-}
+FEED_EVENTS = frozenset({GameEventKind.GOAL, GameEventKind.SAVE, GameEventKind.DEMO, GameEventKind.SHOT,
+                         GameEventKind.OVERTIME, GameEventKind.MISS})
 
 
 def pack_message(message: dict) -> bytes:
@@ -65,15 +64,9 @@ def rotation_to_quaternion(rot: np.ndarray) -> tuple[float, float, float, float]
     return x, y, z, w
 
 
-def feed_events(events: Iterable[dict]) -> list[dict]:
-    """The events the feed shows, each with its kind, tick and the fields ``FEED_EVENTS`` keeps."""
-    out = []
-    for event in events:
-        fields = FEED_EVENTS.get(event.get("kind"))
-        if fields is not None:
-            out.append({"kind": event["kind"], "tick": int(event.get("tick", 0)),
-                        **{f: event.get(f) for f in fields}})
-    return out
+def feed_events(events: Iterable[GameEvent]) -> list[dict]:
+    """The events the feed shows (``FEED_EVENTS``), as their wire maps."""
+    return [event.as_dict() for event in events if event.kind in FEED_EVENTS]
 
 
 def roster(state: GameState, names: dict[str, str] | None = None, **extra: Any) -> dict:

@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 from rocketdrl_ma.policies.base import Policy
-from rocketdrl_ma.server.protocol import check_name, encode_state, pack
+from rocketdrl_ma.server.protocol import MatchStatus, check_name, encode_state, pack
 from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
 
 log = logging.getLogger(__name__)
@@ -123,7 +123,7 @@ class TrainingBroadcast:
             self._send(env, decision, info, slots, done=True)
             self.session.put(self.keys.events(self.run),
                              pack({"match": self.run, "decision": decision, "final": True, "info": info,
-                                   "status": "stopped" if self._stop.is_set() else "finished",
+                                   "status": MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED,
                                    "summary": env.rules.summary()}))
             if not self._stop.is_set():
                 self.published.append(iteration)
@@ -135,10 +135,11 @@ class TrainingBroadcast:
     def _send(self, env, decision: int, info: dict, slots: dict, done: bool) -> None:
         state = env.game_state
         common = {"match": self.run, "decision": decision, "scoreboard": env.rules.scoreboard(), "done": done}
-        self._state_pub.put(pack({**common, "status": "finished" if done else "running", "info": info,
+        self._state_pub.put(pack({**common, "status": MatchStatus.FINISHED if done else MatchStatus.RUNNING, "info": info,
                                   "slots": slots, "state": encode_state(state)}))
         if state.events:
-            self.session.put(self.keys.events(self.run), pack({**common, "events": state.events, "info": info}))
+            events = [event.as_dict() for event in state.events]
+            self.session.put(self.keys.events(self.run), pack({**common, "events": events, "info": info}))
 
     def close(self) -> None:
         self._stop.set()

@@ -10,6 +10,7 @@ import pytest
 from rocketdrl_ma.env.replay import FORMAT_VERSION, ReplayWriter, load_replay, render_replay
 from rocketdrl_ma.physics import BallState, CarControls, CarState, yaw_rot_mat
 from rocketdrl_ma.physics.car_config import PRESETS
+from rocketdrl_ma.rules.events import Touch
 from rocketdrl_ma.rules.state import GameState, Obstacle
 
 
@@ -46,7 +47,7 @@ def make_states(n=20, seed=0) -> list[GameState]:
             pad_timers=np.where(rng.uniform(size=34) < 0.3, rng.uniform(0, 10, 34), 0.0), last_controls=controls,
             score=(t // 7, t // 9), clock_s=300.0 - t * 8 / 120, is_overtime=t == 19, kickoff_pending=t == 0,
             last_touch=None if t < 2 else agents[t % len(agents)], obstacles=obstacles,
-            events=[{"type": "touch", "agent": agents[0], "tick": 8 * t}] if t % 4 == 0 else [],
+            events=[Touch(8 * t, agents[0])] if t % 4 == 0 else [],
             car_configs={a: PRESETS["merc" if a == "blue_1" else "octane"] for a in agents},
         ))
     return states

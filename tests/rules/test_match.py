@@ -29,7 +29,7 @@ def test_goal_scores_resets_to_kickoff_and_rewards_both_teams():
     m.advance(_idle(m), 60)
     state = m.game_state()
     assert state.score == (1, 0)
-    assert [e["team"] for e in state.events if e["kind"] == "goal"] == ["blue"]
+    assert [e.team for e in state.events if e.kind == "goal"] == ["blue"]
     np.testing.assert_allclose(state.ball.pos, [0, 0, C.BALL_REST_Z])  # back to kickoff
     assert m.weighted_rewards("blue_1", state)[0] == pytest.approx(10.0)
     reward, terms = m.weighted_rewards("orange_0", state)
@@ -67,7 +67,7 @@ def test_tied_at_zero_goes_to_golden_goal_overtime():
     m = _match(clock_s=0.5)
     m.advance(_idle(m), 120)
     assert m.overtime and not m.is_terminated()
-    assert any(e["kind"] == "overtime" for e in m.events) or m.overtime
+    assert any(e.kind == "overtime" for e in m.events) or m.overtime
     _shoot_into_orange_goal(m)
     m.advance(_idle(m), 60)
     assert m.is_terminated() and m.summary()["winner"] == "blue"
@@ -88,7 +88,7 @@ def test_touch_shot_and_scorer_are_reported():
     kinds = []
     for _ in range(20):
         m.advance({"blue_0": CarControls(throttle=1.0), "orange_0": CarControls()}, 8)
-        kinds += [(e["kind"], e.get("agent") or e.get("scorer")) for e in m.events]
+        kinds += [(e.kind, e.credited_to) for e in m.events]
     assert ("touch", "blue_0") in kinds
     assert ("shot", "blue_0") in kinds
     assert ("goal", "blue_0") in kinds
@@ -130,7 +130,7 @@ def test_a_ball_resting_on_a_car_is_a_touch_per_landing_not_one_per_tick():
     touches = 0
     for _ in range(15):
         m.advance({"blue_0": CarControls(), "orange_0": CarControls()}, 8)
-        touches += sum(e["kind"] == "touch" for e in m.events)
+        touches += sum(e.kind == "touch" for e in m.events)
     # it lands, hops once off the hit impulse, lands again and rests there for 100+ ticks of contact
     assert 1 <= touches <= 2
     assert m.last_touch == "blue_0" and m.arena.ball.get_state().pos[2] > 140.0

@@ -53,7 +53,7 @@ def test_penalty_scripted_shot_scores_and_gets_ten():
     assert summary["is_success"] is True and summary["goals"] == 1 and summary["misses"] == 0
     assert summary["stats"]["blue_0"]["touches"] >= 1 and summary["stats"]["blue_0"]["shots"] >= 1
     assert 0.5 < summary["time_to_goal_s"] < 5.0
-    assert any(e["kind"] == "goal" and e["scorer"] == "blue_0" for e in info["events"])
+    assert any(e.kind == "goal" and e.scorer == "blue_0" for e in info["events"])
     env.close()
 
 
@@ -330,7 +330,7 @@ def test_a_scripted_double_jump_scores_the_aerial_with_the_seed_actions():
         _, rewards, _, _, infos = env.step({"blue_0": action})
     summary = infos["blue_0"]["summary"]
     assert summary["is_success"] is True and summary["aerial_touches"] == 1
-    assert any(e["kind"] == "goal" for e in infos["blue_0"]["events"]) and rewards["blue_0"] == pytest.approx(9.99)
+    assert any(e.kind == "goal" for e in infos["blue_0"]["events"]) and rewards["blue_0"] == pytest.approx(9.99)
     env.close()
 
 

@@ -8,6 +8,7 @@ import rocketdrl_ma
 from rocketdrl_ma.physics import BallState, CarState
 from rocketdrl_ma.rules import rewards as R
 from rocketdrl_ma.rules.match import Match
+from rocketdrl_ma.rules.events import Goal, Miss, Touch
 from rocketdrl_ma.rules.minigames.penalty_duel import PenaltyDuel
 from rocketdrl_ma.rules.state import GameState
 
@@ -22,9 +23,7 @@ def state(ball_pos=(0.0, 0.0, 93.0), ball_vel=(0.0, 0.0, 0.0), car_pos=(0.0, -10
 
 
 def test_event_terms_count_this_decisions_events_from_each_side():
-    s = state(events=[{"kind": "goal", "tick": 1, "team": "blue", "scorer": "blue_0", "own_goal": False},
-                      {"kind": "touch", "tick": 1, "agent": "orange_0"},
-                      {"kind": "miss", "tick": 2, "reason": "wide"}, {"kind": "miss", "tick": 3, "reason": "wide"}])
+    s = state(events=[Goal(1, "blue", "blue_0", False), Touch(1, "orange_0"), Miss(2, "wide"), Miss(3, "wide")])
     assert R.GoalScored().get("blue_0", s) == 1.0 and R.GoalScored().get("orange_0", s) == -1.0
     assert R.BallTouched().get("orange_0", s) == 1.0 and R.BallTouched().get("blue_0", s) == 0.0
     missed = R.ShooterSide(R.RoundMissed())

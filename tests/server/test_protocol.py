@@ -11,6 +11,7 @@ import pytest
 
 import rocketdrl_ma
 from rocketdrl_ma.physics import PRESETS
+from rocketdrl_ma.rules.events import Touch
 from rocketdrl_ma.rules.state import Obstacle
 from rocketdrl_ma.server.crypto import (KeyExchange, ServerIdentity, ServerKey, SignatureError, action_mac,
                                         parse_public_key, random_bytes, request_mac)
@@ -108,7 +109,7 @@ def test_game_state_round_trip():
     state = dataclasses.replace(
         state, obstacles=(Obstacle(np.array([0.0, 100.0, 50.0]), np.array([10.0, 20.0, 30.0])),),
         car_configs={**state.car_configs, "blue_1": custom}, mode_state={"round": 2, "flags": [True, False]},
-        events=[{"kind": "touch", "tick": 5, "agent": "blue_0"}])
+        events=[Touch(5, "blue_0")])
     back = decode_state(unpack(pack({"state": encode_state(state)}))["state"])
     _assert_states_equal(state, back)
     assert back.car_configs["blue_0"] is PRESETS["octane"]  # a stock preset travels by name

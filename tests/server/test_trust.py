@@ -57,5 +57,5 @@ def test_spectator_yields_verified_typed_updates_in_order(running):
     assert [s.seq for s in states] == sorted(s.seq for s in states) and len({s.seq for s in states}) == len(states)
     assert [s.decision for s in states] == list(range(states[0].decision, states[-1].decision + 1))
     assert states[-1].done and not states[0].done and states[0].state.tick < states[-1].state.tick
-    assert any(e["kind"] == "touch" for u in events for e in u.events)
+    assert any(e.kind == "touch" for u in events for e in u.events)
     assert spectator.dropped == {} and spectator.poll(0.1) is None  # after the end: nothing more

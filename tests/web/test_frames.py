@@ -8,6 +8,7 @@ import pytest
 import rocketdrl_ma
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.physics.arena_geometry import arena_mesh
+from rocketdrl_ma.rules.events import Goal, Touch
 from rocketdrl_ma.web.arena import PAGE_FILLET_SEGMENTS, arena_json
 from rocketdrl_ma.web.frames import FLAG_BOOSTING, FLAG_DEMOED, frame, pack_message, roster, rotation_to_quaternion
 from rocketdrl_ma.web.replays import ReplayLibrary
@@ -50,8 +51,7 @@ def test_a_4v4_frame_is_compact_and_carries_the_state():
     cast = roster(state)
     assert cast["agents"] == [f"blue_{i}" for i in range(4)] + [f"orange_{i}" for i in range(4)]
     assert cast["teams"] == [0] * 4 + [1] * 4
-    message = frame(state, cast["agents"], [{"kind": "goal", "tick": 9, "team": "blue", "scorer": "blue_0",
-                                             "own_goal": False}, {"kind": "touch", "tick": 9, "agent": "blue_1"}])
+    message = frame(state, cast["agents"], [Goal(9, "blue", "blue_0", False), Touch(9, "blue_1")])
     payload = pack_message(message)
     assert len(payload) < MAX_4V4_FRAME_BYTES
     decoded = msgpack.unpackb(payload)

@@ -4,6 +4,7 @@ from __future__ import annotations
 from rocketdrl_ma.physics import BallState
 from rocketdrl_ma.physics import constants as C
 
+from .. import events as game_events
 from .. import rewards
 from ..mutators import StateMutator
 from ..state import GameState
@@ -100,8 +101,7 @@ class Aerial(ShotMinigame):
             return
         self.aerial_done[agent] = True
         self.stats[agent]["aerial_touches"] += 1
-        self.events.append({"kind": "aerial_touch", "tick": self.arena.tick_count, "agent": agent,
-                            "car_z_uu": round(float(car.pos[2]), 2)})
+        self.events.append(game_events.AerialTouch(self.arena.tick_count, agent, round(float(car.pos[2]), 2)))
 
     def goal_counts(self) -> bool:
         return any(self.aerial_done.values())

@@ -28,6 +28,7 @@ import numpy as np
 from rocketdrl_ma.physics import Arena, BallState, Car, CarState, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 
+from .. import events as game_events
 from .. import rewards
 from ..base import Rules, ball_heading_into_goal
 from ..mutators import StateMutator
@@ -188,7 +189,7 @@ class ShotMinigame(Rules):
         self.round_time_s += self.arena.tick_time
         ball = self.arena.ball.get_state()
         for event in self.events[self._seen:]:
-            if event["kind"] == "touch":
+            if isinstance(event, game_events.Touch):
                 self._touch(event, ball)
         self._seen = len(self.events)
         self._ball_prev = ball
@@ -206,10 +207,10 @@ class ShotMinigame(Rules):
                 self._end_round("miss", reason)
         self._seen = len(self.events)
 
-    def _touch(self, event: dict, ball: BallState) -> None:
+    def _touch(self, event: game_events.Touch, ball: BallState) -> None:
         """Count a touch; a shooter's touch that sends the ball on target is a shot, a keeper's touch that
         takes a ball off target is a save."""
-        agent = event["agent"]
+        agent = event.agent
         self.stats[agent]["touches"] += 1
         prev = self._ball_prev
         if agent_team(agent) == BLUE:
@@ -217,10 +218,10 @@ class ShotMinigame(Rules):
             self.last_shooter_touch = agent
             if ball_heading_into_goal(ball.pos, ball.vel, 1.0):
                 self.stats[agent]["shots"] += 1
-                self.events.append({"kind": "shot", "tick": event["tick"], "agent": agent})
+                self.events.append(game_events.Shot(event.tick, agent))
         elif ball_heading_into_goal(prev.pos, prev.vel, 1.0) and not ball_heading_into_goal(ball.pos, ball.vel, 1.0):
             self.stats[agent]["saves"] += 1
-            self.events.append({"kind": "save", "tick": event["tick"], "agent": agent})
+            self.events.append(game_events.Save(event.tick, agent))
         self.on_touch(agent)
 
     def _standard_miss(self, ball: BallState) -> str | None:
@@ -241,9 +242,9 @@ class ShotMinigame(Rules):
             scorer = self.last_shooter_touch
             if scorer is not None:
                 self.stats[scorer]["goals"] += 1
-            self.events.append({"kind": "goal", "tick": tick, "team": "blue", "scorer": scorer, "own_goal": False})
+            self.events.append(game_events.Goal(tick, "blue", scorer, False))
         else:
-            self.events.append({"kind": "miss", "tick": tick, "reason": reason})
+            self.events.append(game_events.Miss(tick, reason))
         if len(self.results) >= self.rounds:
             self.ended = True
         else:

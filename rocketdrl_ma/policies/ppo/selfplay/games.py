@@ -19,6 +19,7 @@ from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.ppo.envs import Episode, StepResult
 from rocketdrl_ma.policies.ppo.shaping import make_shaping
 from rocketdrl_ma.policies.scripted import make_scripted
+from rocketdrl_ma.rules.events import Goal
 
 TEAMS = ("blue", "orange")
 SELF = 0  # the opponent index of the learner itself
@@ -152,8 +153,8 @@ class SelfPlayGames:
             rows, team = self.rows(i), self.learner_team[i]
             reward[rows] = rewards[i, self.team_columns[team]]
             for event in infos[i][self.learners(i)[0]].get("events", ()):
-                if event.get("kind") == "goal":
-                    goals[i, 0 if event["team"] == team else 1] += 1
+                if isinstance(event, Goal):
+                    goals[i, 0 if event.team == team else 1] += 1
             if self.shaping:
                 state = self.envs[i].game_state
                 shaping[rows] = [self.shaping[i].get(agent, state)[0] for agent in self.learners(i)]
