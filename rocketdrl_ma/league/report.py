@@ -69,7 +69,7 @@ def team_metrics_lines(cfg: LeagueConfig, results: list[MatchResult]) -> list[st
              "the share of live play each of its cars (by slot) was the one nearest its own goal.", "",
              "| entrant | matches | goals for | goals against | " + " | ".join(h for _, h in PER_MATCH)
              + " | team-mate distance (uu) | last back by slot |",
-             "|---|" + "---:|" * (5 + len(PER_MATCH)) + "---|"]
+             "|---|" + "---:|" * (4 + len(PER_MATCH)) + "---|"]
     for name, row in rows.items():
         if not row.matches:
             lines.append(f"| {name} | 0 |" + " - |" * (3 + len(PER_MATCH)) + " - |")
