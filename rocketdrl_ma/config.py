@@ -54,7 +54,8 @@ def mode_parameters(mode: str) -> dict[str, Any]:
             params.setdefault(name, p.default)
         if not forwards:
             break
-    if "team_size" in params:  # a symmetric mode sets both sides through team_size
+    if "team_size" in params and "blue_size" not in inspect.signature(cls.__init__).parameters:
+        # a symmetric mode sets both sides through team_size
         params.pop("blue_size", None)
         params.pop("orange_size", None)
     return params

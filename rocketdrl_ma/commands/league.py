@@ -25,11 +25,12 @@ def _run_league(args: argparse.Namespace) -> int:
         print(f"league {cfg.name}: {run.scheduled} scheduled, {run.already_stored} already stored, "
               f"{run.played} played now", flush=True)
     with ResultsStore(cfg.results) as store:
-        table = rate(cfg, planned, store.results(source="league", key_prefix=f"{cfg.name}/"))
+        results = store.results(source="league", key_prefix=f"{cfg.name}/")
+    table = rate(cfg, planned, results)
     for i, r in enumerate(table.ratings, 1):
         print(f"{i:2d}. {r.name:24s} mu {r.mu:6.2f}  sigma {r.sigma:5.2f}  ordinal {r.ordinal:6.2f}  "
               f"W-D-L {r.wins}-{r.draws}-{r.losses}")
-    print(f"report: {write_report(cfg, table, len(planned), args.config, args.report)}")
+    print(f"report: {write_report(cfg, table, len(planned), args.config, args.report, results)}")
     return 0
 
 

@@ -393,6 +393,13 @@ def car_features(car: CarState | None) -> np.ndarray:
     return features
 
 
+@functools.lru_cache(maxsize=None)
+def _padded_slots(blue_size: int, orange_size: int) -> tuple[int, int]:
+    """(teammate slots, opponent slots) that fit every agent of a ``blue_size`` v ``orange_size`` game."""
+    teams = [(own, other) for own, other in ((blue_size, orange_size), (orange_size, blue_size)) if own > 0]
+    return max(own - 1 for own, _ in teams), max(other for _, other in teams)
+
+
 class TeamRelativeObs(ObsBuilder):
     """The whole game from one agent's side, in its team frame (orange mirrored; see the module doc).
 
@@ -417,12 +424,22 @@ class TeamRelativeObs(ObsBuilder):
     agent gets the same shape; unused slots and cars absent from ``state.cars`` are zeros (``present`` 0).
     A demoed car still appears with ``is_demoed`` 1. Sizes: 1v1 87, 2v2 127, 3v3 167, 4v4 207.
 
+    Unequal teams are padded: in a 1v2 (``T`` 1, ``O`` 2) blue's lone car has an empty team-mate slot and orange's
+    cars an empty second opponent slot, so both sides' observations have one shape (127). ``max_team_size``
+    (1..4) fixes the layout whatever the game: ``T = max_team_size - 1`` and ``O = max_team_size`` slots, the
+    absent cars zero, so one policy (a checkpoint trained with it) plays 1v1, 1v2, 2v2 and 2v1 with the same
+    input; a game with a bigger team is a ValueError naming ``max_team_size``.
+
     ``space(blue_size, orange_size)`` fixes the team sizes for later ``build`` calls; before it is called,
     ``build`` infers them from the agent names in the state. The per-car features of the last state are
     cached for the other agents of the same decision (keyed on the object, which is a read-only snapshot).
     """
 
-    def __init__(self):
+    def __init__(self, max_team_size: int | None = None):
+        if max_team_size is not None and (isinstance(max_team_size, bool) or not isinstance(max_team_size, int)
+                                          or not 1 <= max_team_size <= 4):
+            raise ValueError(f"max_team_size: must be an int in 1..4 or null, got {max_team_size!r}")
+        self.max_team_size = max_team_size
         self._sizes: tuple[int, int] | None = None
         self._spaces: dict[tuple[int, int], spaces.Box] = {}
         self._cached_state: GameState | None = None  # the last state seen, held so its id cannot be reused
@@ -432,12 +449,15 @@ class TeamRelativeObs(ObsBuilder):
         self._bounds: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}  # a space's bounds as float64
         self._layouts: dict[tuple[str, int, int], tuple] = {}  # see _layout
 
-    @staticmethod
-    @functools.lru_cache(maxsize=None)
-    def slots(blue_size: int, orange_size: int) -> tuple[int, int]:
+    def slots(self, blue_size: int, orange_size: int) -> tuple[int, int]:
         """(teammate slots, opponent slots) for this team size."""
-        teams = [(own, other) for own, other in ((blue_size, orange_size), (orange_size, blue_size)) if own > 0]
-        return max(own - 1 for own, _ in teams), max(other for _, other in teams)
+        if self.max_team_size is not None:
+            for name, size in (("blue_size", blue_size), ("orange_size", orange_size)):
+                if size > self.max_team_size:
+                    raise ValueError(f"max_team_size: the observation has room for teams of up to "
+                                     f"{self.max_team_size} cars, but {name} is {size}")
+            return self.max_team_size - 1, self.max_team_size
+        return _padded_slots(blue_size, orange_size)
 
     def size(self, blue_size: int, orange_size: int) -> int:
         mates, opps = self.slots(blue_size, orange_size)

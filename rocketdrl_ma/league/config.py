@@ -158,9 +158,14 @@ def validate_league_config(raw: Any) -> LeagueConfig:
     if not isinstance(overrides, dict):
         raise ValueError(f"overrides: expected a mapping of match config keys, got {overrides!r}")
     game_config = load_config(match, overrides)
-    team_size = int(game_config.get("team_size", 0))
-    if game_config.get("mode") != "match" or team_size < 1:
+    if game_config.get("mode") != "match":
         raise ValueError(f"match: {match} is a {game_config.get('mode')!r} config; a league needs mode 'match'")
+    sizes = [game_config[key] if game_config.get(key) is not None else game_config["team_size"]
+             for key in ("blue_size", "orange_size")]
+    if sizes[0] != sizes[1]:
+        raise ValueError(f"blue_size/orange_size: a league plays every pair on both sides, so its match needs "
+                         f"teams of one size; got {sizes[0]}v{sizes[1]} (set team_size only)")
+    team_size = int(sizes[0])
     fmt = raw.get("format", "round_robin")
     if fmt not in FORMATS:
         raise ValueError(f"format: {fmt!r} is not one of {list(FORMATS)}")

@@ -53,7 +53,7 @@ def play_local(cfg: LeagueConfig, match: ScheduledMatch) -> MatchResult:
         state = env.rules.game_state()
         return _result(cfg, match, summary["score"], state.tick / state.tick_rate,
                        {"where": "local", "overtime": bool(summary.get("overtime", False)),
-                        "stats": summary.get("stats", {})})
+                        "stats": summary.get("stats", {}), "team": summary.get("team", {})})
     finally:
         env.close()
 
@@ -122,4 +122,4 @@ def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session, client=Non
     return _result(cfg, match, summary["score"], duration_s,
                    {"where": "server", "server": link.name, "server_match": match_id,
                     "server_result": info.get("result_key"), "overtime": bool(summary["overtime"]),
-                    "stats": summary.get("stats", {}), "missed_decisions": missed})
+                    "stats": summary.get("stats", {}), "team": summary.get("team", {}), "missed_decisions": missed})

@@ -1,10 +1,88 @@
-"""The league report: ``report.md`` (ratings table, payoff matrix, how to reproduce) and ``ratings.png``."""
+"""The league report: ``report.md`` (ratings table, payoff matrix, team metrics per entrant, how to reproduce) and
+``ratings.png``."""
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
+
+import numpy as np
+
+from rocketdrl_ma.results import MatchResult
 
 from .config import LeagueConfig
 from .ratings import LeagueTable
+
+TEAMS = ("blue", "orange")
+#: team totals reported per match, with their column headers
+PER_MATCH = (("passes", "passes"), ("assists", "assists"), ("double_commits", "double commits"),
+             ("demos", "demos"), ("boost_collected", "boost collected"))
+
+
+@dataclass
+class EntrantTeamMetrics:
+    """An entrant's team metrics (``rules/team_metrics.py``) over the stored matches it played."""
+    matches: int = 0
+    goals_for: int = 0
+    goals_against: int = 0
+    totals: dict[str, float] = field(default_factory=dict)     # PER_MATCH keys, summed over matches
+    distances_uu: list[float] = field(default_factory=list)    # mean team-mate distance of each match
+    last_back: list[list[float]] = field(default_factory=list)  # per match: each car's share, by slot
+
+    def per_match(self, key: str) -> float:
+        return self.totals.get(key, 0.0) / self.matches if self.matches else float("nan")
+
+
+def entrant_team_metrics(cfg: LeagueConfig, results: list[MatchResult]) -> dict[str, EntrantTeamMetrics]:
+    """Every entrant's team metrics over ``results`` (matches stored before team metrics existed count for the
+    goals only)."""
+    out = {e.name: EntrantTeamMetrics() for e in cfg.entrants}
+    for result in results:
+        team_metrics = result.details.get("team", {})
+        for team in TEAMS:
+            entrant = {slot: name for slot, name in result.entrants.items() if slot.startswith(team)}
+            names = set(entrant.values())
+            if len(names) != 1 or next(iter(names)) not in out:
+                continue
+            row = out[next(iter(names))]
+            row.matches += 1
+            mine, theirs = ((result.score_blue, result.score_orange) if team == "blue"
+                            else (result.score_orange, result.score_blue))
+            row.goals_for += mine
+            row.goals_against += theirs
+            metrics = team_metrics.get(team)
+            if not metrics:
+                continue
+            for key, _ in PER_MATCH:
+                row.totals[key] = row.totals.get(key, 0.0) + float(metrics.get(key, 0.0))
+            if metrics.get("mean_teammate_distance_uu") is not None:
+                row.distances_uu.append(float(metrics["mean_teammate_distance_uu"]))
+            shares = metrics.get("last_back_share", {})
+            row.last_back.append([shares[slot] for slot in sorted(shares, key=lambda s: int(s.rsplit("_", 1)[1]))])
+    return out
+
+
+def team_metrics_lines(cfg: LeagueConfig, results: list[MatchResult]) -> list[str]:
+    """The report's "Team metrics" section: one row per entrant."""
+    rows = entrant_team_metrics(cfg, results)
+    lines = ["## Team metrics", "",
+             "Per match of each entrant, over the stored matches (definitions: README, \"Team metrics\"). Last back: "
+             "the share of live play each of its cars (by slot) was the one nearest its own goal.", "",
+             "| entrant | matches | goals for | goals against | " + " | ".join(h for _, h in PER_MATCH)
+             + " | team-mate distance (uu) | last back by slot |",
+             "|---|" + "---:|" * (4 + len(PER_MATCH)) + "---|"]
+    for name, row in rows.items():
+        if not row.matches:
+            lines.append(f"| {name} | 0 |" + " - |" * (3 + len(PER_MATCH)) + " - |")
+            continue
+        distance = f"{np.mean(row.distances_uu):.0f}" if row.distances_uu else "-"
+        widths = {len(shares) for shares in row.last_back}
+        last_back = (" / ".join(f"{v:.2f}" for v in np.mean(row.last_back, axis=0))
+                     if len(widths) == 1 else "-")
+        lines.append(f"| {name} | {row.matches} | {row.goals_for / row.matches:.2f} | "
+                     f"{row.goals_against / row.matches:.2f} | "
+                     + " | ".join(f"{row.per_match(key):.2f}" for key, _ in PER_MATCH)
+                     + f" | {distance} | {last_back} |")
+    return lines
 
 
 def plot_ratings(table: LeagueTable, out: Path, title: str) -> Path:
@@ -34,7 +112,9 @@ def plot_ratings(table: LeagueTable, out: Path, title: str) -> Path:
 
 
 def write_report(cfg: LeagueConfig, table: LeagueTable, scheduled: int, config_path: str,
-                 out_dir: str | Path | None = None) -> Path:
+                 out_dir: str | Path | None = None, results: list[MatchResult] | None = None) -> Path:
+    """``report.md`` and ``ratings.png`` in ``out_dir`` (default: the config's report folder); with ``results`` (the
+    league's stored matches) also the team metrics per entrant."""
     out = Path(out_dir or cfg.report)
     png = plot_ratings(table, out / "ratings.png", f"league {cfg.name}: {table.played} matches")
     names = [e.name for e in cfg.entrants]
@@ -63,6 +143,8 @@ def write_report(cfg: LeagueConfig, table: LeagueTable, scheduled: int, config_p
         cells = ["-" if a == b or table.payoff[a][b] is None else f"{table.payoff[a][b]:.2f} ({table.games[a][b]})"
                  for b in names]
         lines.append(f"| **{a}** | " + " | ".join(cells) + " |")
+    if results is not None:
+        lines += [""] + team_metrics_lines(cfg, results)
     report = out / "report.md"
     report.write_text("\n".join(lines) + "\n")
     return report

@@ -16,6 +16,8 @@ from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, agent_team
 
 from .base import Policy
+from . import rotation
+from .rotation import Role
 
 ATTACK_GOAL = np.array([0.0, C.ARENA_EXTENT_Y + 200.0, 0.0])  # in the team frame: always +y
 OWN_GOAL = np.array([0.0, -C.ARENA_EXTENT_Y, 0.0])
@@ -174,6 +176,50 @@ class FlipChaser(ScriptedBot):
                            handbrake=SLIDE_ANGLE_RAD < abs(angle) < REVERSE_ANGLE_RAD)
 
 
+class Rotator(ScriptedBot):
+    """A team player that rotates (``rotation.py``): the first man plays the flip-chaser's game on the ball, the
+    second supports behind it, the last covers the goal; roles are worked out afresh from positions every
+    decision, identically by every team-mate, so only one car goes for the ball. Cars coming back take boost on
+    the way. Alone on its team (1v1, or team-mates demoed) it is the flip-chaser. Stateless, lookup-table rows
+    only (a lookup clone can copy it), one instance plays any number of cars.
+    """
+
+    bot_name = "rotator"
+    ARRIVE_UU = 250.0       # within this of its spot a car stops and turns to face the ball
+    BALL_CLEARANCE_UU = 450.0  # a car off the ball keeps its path this far from the ball
+
+    def __init__(self) -> None:
+        self.chaser = FlipChaser()
+
+    def controls(self, agent: str, state: GameState) -> CarControls:
+        car = state.cars[agent]
+        if car.is_demoed:
+            return CarControls()
+        view = rotation.team_view(agent, state)
+        roles = rotation.assign_roles(view, state.last_touch)
+        role = roles.get(agent, Role.FIRST)
+        if role is Role.FIRST:
+            return self.chaser.controls(agent, state)
+        pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
+        ball = rotation.ball_ahead(view)
+        if role is Role.LAST:
+            behind = rotation.LAST_BEHIND_2V2_UU if len(roles) <= 2 else rotation.LAST_BEHIND_UU
+            spot = rotation.cover_spot(ball, behind)
+        else:
+            rank = sum(1 for a, r in roles.items() if r is Role.SECOND and a != agent and view.pos[a][1] > pos[1])
+            spot = rotation.support_spot(ball, rank=1 + rank)
+        pads = team_frame(agent, C.BOOST_PAD_POSITIONS)
+        target = rotation.boost_on_the_way(pos, spot, car.boost, state.pad_timers, pads)
+        if target is None:
+            target = spot
+        target = _around_ball(pos, target, view.ball_pos, self.BALL_CLEARANCE_UU)
+        speed = float(team_frame(agent, car.vel) @ rot[:, 0])
+        if target is spot and float(np.hypot(*(spot - pos)[:2])) < self.ARRIVE_UU:
+            angle, _ = _angle_distance(pos, rot, view.ball_pos)
+            return _ground_row(0.0, self.chaser._steer(angle))
+        return self.chaser._drive(pos, rot, _out_of_goal_mouth(pos, target), speed)
+
+
 class Idle(ScriptedBot):
     """Does nothing: an empty net for shooting practice."""
 
@@ -219,6 +265,25 @@ def _nose_blocked(pos: np.ndarray, rot: np.ndarray) -> bool:
             or abs(nose[1]) > C.ARENA_EXTENT_Y + C.GOAL_DEPTH - 30.0)
 
 
+def _around_ball(pos: np.ndarray, target: np.ndarray, ball: np.ndarray, clearance_uu: float) -> np.ndarray:
+    """``target``, or a point beside the ball when the straight path to it passes within ``clearance_uu`` of the
+    ball (on the ball's side nearer the middle of the path), so a car off the ball does not touch it on its way."""
+    path = (target - pos)[:2]
+    length = float(np.hypot(*path))
+    if length < 1.0 or ball[2] > 300.0:
+        return target
+    along = float((ball - pos)[:2] @ path) / length
+    if not 0.0 < along < length:
+        return target
+    normal = np.array([-path[1], path[0]]) / length
+    offset = float((ball - pos)[:2] @ normal)
+    if abs(offset) >= clearance_uu:
+        return target
+    side = -1.0 if offset >= 0.0 else 1.0
+    beside = ball[:2] + normal * side * clearance_uu
+    return np.array([beside[0], beside[1], 0.0])
+
+
 def _out_of_goal_mouth(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
     """A car in a goal mouth bound for a target beside it leaves along y first, clear of the steps."""
     if abs(pos[1]) > 4600.0 and abs(pos[0]) < C.GOAL_HALF_WIDTH + 50.0 and abs(target[0]) > C.GOAL_HALF_WIDTH - 150.0:
@@ -226,7 +291,8 @@ def _out_of_goal_mouth(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
     return target
 
 
-SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {cls.bot_name: cls for cls in (BallChaser, FlipChaser, Goalie, Idle)}
+SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {cls.bot_name: cls for cls in (BallChaser, FlipChaser, Goalie, Idle,
+                                                                                 Rotator)}
 
 
 def make_scripted(name: str) -> ScriptedBot:

@@ -1,4 +1,5 @@
-"""The full match: 1v1 to 4v4, clock, kickoff countdown, goals, overtime and the zero-second rule."""
+"""The full match: 1v1 to 4v4 and unequal teams (1v2, 2v3...), clock, kickoff countdown, goals, overtime, the
+zero-second rule, and the team metrics of ``team_metrics.py`` in its summary."""
 from __future__ import annotations
 
 import numpy as np
@@ -10,8 +11,18 @@ from . import rewards
 from .base import Rules, ball_heading_into_goal
 from .mutators import KickoffMutator
 from .state import BLUE, ORANGE, TEAM_NAMES, agent_team
+from .team_metrics import TeamMetrics
 
 BALL_ON_GROUND_Z = C.BALL_RADIUS + 5.0
+MAX_TEAM_SIZE = 4
+
+
+def check_team_size(field: str, value: object) -> int:
+    """A side of a match: an int in 1..4; ValueError naming ``field`` otherwise."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= MAX_TEAM_SIZE:
+        raise ValueError(f"{field}: must be an int in 1..{MAX_TEAM_SIZE} (cars on that side of a match), "
+                         f"got {value!r}")
+    return int(value)
 
 
 def opponent_goal_sign(team: int) -> float:
@@ -27,6 +38,9 @@ class Match(Rules):
     ball past the goal line) scores for the attacking team and resets to a kickoff. At 0:00 a tied game
     goes to golden-goal overtime; otherwise play continues until the ball next touches the ground (the
     zero-second rule). Overtime longer than ``overtime_limit_s`` truncates the episode as a draw.
+
+    ``team_size`` cars a side, or ``blue_size`` / ``orange_size`` apart (each 1..4; either one left out takes
+    ``team_size``): ``team_size: 2, orange_size: 3`` is a 2v3.
     """
 
     REWARD_TERMS = {"goal": rewards.GoalScored, "touch": rewards.BallTouched,
@@ -34,16 +48,21 @@ class Match(Rules):
                     "player_velocity_to_ball": rewards.PlayerVelocityToBall, "boost": rewards.BoostAmount}
     DEFAULT_REWARD_WEIGHTS = {"goal": 10.0}
 
-    def __init__(self, team_size: int = 1, clock_s: float = 300.0, kickoff_countdown_s: float = 3.0,
-                 overtime_limit_s: float | None = 300.0, **kwargs):
-        super().__init__(blue_size=team_size, orange_size=team_size, **kwargs)
+    def __init__(self, team_size: int = 1, blue_size: int | None = None, orange_size: int | None = None,
+                 clock_s: float = 300.0, kickoff_countdown_s: float = 3.0, overtime_limit_s: float | None = 300.0,
+                 **kwargs):
+        team_size = check_team_size("team_size", team_size)
+        blue_size = team_size if blue_size is None else check_team_size("blue_size", blue_size)
+        orange_size = team_size if orange_size is None else check_team_size("orange_size", orange_size)
+        super().__init__(blue_size=blue_size, orange_size=orange_size, **kwargs)
         if not clock_s > 0.0:
             raise ValueError(f"clock_s: must be > 0, got {clock_s!r}")
         if kickoff_countdown_s < 0.0:
             raise ValueError(f"kickoff_countdown_s: must be >= 0, got {kickoff_countdown_s!r}")
         if overtime_limit_s is not None and overtime_limit_s <= 0.0:
             raise ValueError(f"overtime_limit_s: must be > 0 or null, got {overtime_limit_s!r}")
-        self.team_size = team_size
+        self.team_size = team_size if blue_size == orange_size else None  # None: unequal teams
+        self.team_metrics = TeamMetrics(self.possible_agents, C.TICK_RATE_HZ)
         self.clock_length_s = float(clock_s)
         self.kickoff_countdown_s = float(kickoff_countdown_s)
         self.overtime_limit_s = overtime_limit_s
@@ -59,7 +78,15 @@ class Match(Rules):
         self.decisions = 0
         self._classified = 0
         self._ball_prev = None
-        self.stats = {agent: {"goals": 0, "touches": 0, "shots": 0, "saves": 0, "demos": 0} for agent in self.cars}
+        self.stats = {agent: {"goals": 0, "touches": 0, "shots": 0, "saves": 0} for agent in self.cars}
+        self.team_metrics.tick_rate = float(self.arena.tick_rate)
+        self.team_metrics.reset()
+        self._car_rows = np.array([car.batch_row for car in self.cars.values()], dtype=np.int64)
+
+    def end_tick(self, physics_events) -> None:
+        if not self.ended and self.countdown_s <= 0.0:
+            self.team_metrics.on_tick(physics_events, self._agent_by_car_id)
+        super().end_tick(physics_events)
 
     def controls_frozen(self) -> bool:
         return self.countdown_s > 0.0
@@ -109,13 +136,15 @@ class Match(Rules):
                         and not ball_heading_into_goal(ball_pos, ball_vel, -sign)):
                     self.events.append(game_events.Save(event.tick, agent))
                     self.stats[agent]["saves"] += 1
-            elif isinstance(event, game_events.Demo):
-                self.stats[event.agent]["demos"] += 1
         self._classified = len(self.events)
 
     def begin_decision(self, controls) -> None:
         self._classified = 0
         self.decisions += 1
+        if not self.ended and self.countdown_s <= 0.0:
+            arrays = self.arena.batch.arrays()
+            pos, demoed = arrays.car_pos[self._car_rows], arrays.car_is_demoed[self._car_rows]
+            self.team_metrics.on_decision({agent: None if demoed[k] else pos[k] for k, agent in enumerate(self.cars)})
         super().begin_decision(controls)
 
     def _goal(self, team: int) -> None:
@@ -124,6 +153,7 @@ class Match(Rules):
         own_goal = scorer is not None and agent_team(scorer) != team
         if scorer is not None and not own_goal:
             self.stats[scorer]["goals"] += 1
+        self.team_metrics.on_goal(team, scorer, self.arena.tick_count)
         self.events.append(game_events.Goal(self.arena.tick_count, TEAM_NAMES[team], scorer, own_goal))
         if self.overtime or (self.clock_s <= 0.0):
             self.ended = True
@@ -153,4 +183,5 @@ class Match(Rules):
         winner = None
         if self.score[BLUE] != self.score[ORANGE]:
             winner = "blue" if self.score[BLUE] > self.score[ORANGE] else "orange"
-        return {**self.scoreboard(), "winner": winner, "stats": {a: dict(s) for a, s in self.stats.items()}}
+        stats = {a: {**s, **self.team_metrics.car_summary(a)} for a, s in self.stats.items()}
+        return {**self.scoreboard(), "winner": winner, "stats": stats, "team": self.team_metrics.summary()}

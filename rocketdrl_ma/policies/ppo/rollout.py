@@ -17,7 +17,8 @@ Keys besides ``observation``/``action``/``reward``/``done``/``terminated``/``tru
 - written for the learner's bookkeeping (what a trajectory batch must carry back): ``shaping`` (the shaping
   term), ``episode_end``/``episode_return``/``episode_length``/``episode_success`` on the rows whose episode
   ended, and in self-play, on the first row of a copy, ``match_end``/``match_opponent``/``match_generation``/
-  ``match_points`` (PFSP's results) and ``goals_for``/``goals_against``.
+  ``match_points`` (PFSP's results), ``match_team`` (the learner team's ``TEAM_LOG_METRICS`` in that match) and
+  ``goals_for``/``goals_against``.
 """
 from __future__ import annotations
 
@@ -31,6 +32,8 @@ from gymnasium import spaces
 from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
+
+from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
 
 from .envs import EnvPool
 
@@ -94,6 +97,7 @@ class RolloutEnv(EnvBase):
                         "match_opponent": Unbounded(shape=(r,), dtype=i64),
                         "match_generation": Unbounded(shape=(r,), dtype=i64),
                         "match_points": Unbounded(shape=(r,), dtype=f32),
+                        "match_team": Unbounded(shape=(r, len(TEAM_LOG_METRICS)), dtype=f32),
                         "goals_for": Unbounded(shape=(r,), dtype=i64),
                         "goals_against": Unbounded(shape=(r,), dtype=i64)})
         self.full_observation_spec = Composite(obs, shape=(r,))
@@ -159,6 +163,7 @@ class RolloutEnv(EnvBase):
                 stats["match_opponent"][row] = result.opponent
                 stats["match_generation"][row] = result.generation
                 stats["match_points"][row] = result.points
+                stats["match_team"][row] = result.team
         else:
             step = self.games.step(actions)
         self._obs = step.obs
@@ -201,6 +206,7 @@ class RolloutEnv(EnvBase):
         if self.selfplay:
             stats.update({"match_end": np.zeros(r, bool), "match_opponent": np.zeros(r, np.int64),
                           "match_generation": np.zeros(r, np.int64), "match_points": np.zeros(r, np.float32),
+                          "match_team": np.zeros((r, len(TEAM_LOG_METRICS)), np.float32),
                           "goals_for": np.zeros(r, np.int64), "goals_against": np.zeros(r, np.int64)})
         return stats
 

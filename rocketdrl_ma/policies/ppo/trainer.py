@@ -30,6 +30,7 @@ from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.policies.ppo.selfplay.imitation import imitation_loss
 from rocketdrl_ma.policies.ppo.selfplay.kickstart import teacher_weight
 from rocketdrl_ma.policies.ppo.selfplay.pool import OpponentPool
+from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
 
 from .checkpoint import ModelPolicy, checkpoint_meta, read_meta, resolve_checkpoint, save_checkpoint, sidecar
 from .envs import Episode
@@ -232,7 +233,8 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             if agent_steps >= next_summary or agent_steps >= cfg["max_steps"]:
                 s_success, s_ret = _episode_stats(since_summary)
                 history.append((agent_steps, s_success, s_ret, len(since_summary)))
-                _log(writer, agent_steps, s_success, s_ret, since_summary, losses, perf, optimizer, difficulty)
+                team = match.pop_team_means() if opponents is not None else {}
+                _log(writer, agent_steps, s_success, s_ret, since_summary, losses, perf, optimizer, difficulty, team)
                 since_summary = []
                 next_summary += cfg["summary_freq"]
             if agent_steps >= next_checkpoint:
@@ -286,6 +288,7 @@ class MatchTally:
         self.points: collections.deque = collections.deque(maxlen=window)
         self.goals_for = self.goals_against = 0
         self.minutes = 0.0
+        self.team_since_summary: list[np.ndarray] = []  # the learner team's TEAM_LOG_METRICS of each match
 
     def add(self, batch: TensorDict, decision_s: float, opponents: OpponentPool) -> None:
         nxt = batch.get("next")
@@ -295,10 +298,19 @@ class MatchTally:
                                                 nxt.get("match_points")[ended].tolist()):
             opponents.record(opponent, generation, points)
             self.points.append(points)
+        self.team_since_summary += list(nxt.get("match_team")[ended].numpy())
         self.goals_for += int(nxt.get("goals_for").sum())
         self.goals_against += int(nxt.get("goals_against").sum())
         copies = batch.shape[0] // self.rows_per_copy
         self.minutes += copies * batch.shape[1] * decision_s / 60.0
+
+    def pop_team_means(self) -> dict[str, float]:
+        """The mean of each team metric over the matches since the last call (``team/<metric>`` in TensorBoard)."""
+        if not self.team_since_summary:
+            return {}
+        rows, self.team_since_summary = np.array(self.team_since_summary), []
+        return {key: float(np.nanmean(column)) for key, column in zip(TEAM_LOG_METRICS, rows.T)
+                if not np.all(np.isnan(column))}
 
     def describe(self) -> str:
         minutes = max(self.minutes, 1e-9)
@@ -408,9 +420,11 @@ def _summary_writer(run_dir: Path):
 
 
 def _log(writer, steps: int, success: float, ret: float, episodes: list, losses: dict, perf: dict[str, float],
-         optimizer: torch.optim.Optimizer, difficulty: float | None) -> None:
+         optimizer: torch.optim.Optimizer, difficulty: float | None, team: dict[str, float]) -> None:
     if writer is None:
         return
+    for key, value in team.items():  # self-play: the learner's team per match (rules/team_metrics.py)
+        writer.add_scalar(f"team/{key}", value, steps)
     if difficulty is not None:
         writer.add_scalar("curriculum/difficulty", difficulty, steps)
     if episodes:

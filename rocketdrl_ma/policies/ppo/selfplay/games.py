@@ -20,6 +20,7 @@ from rocketdrl_ma.policies.ppo.envs import Episode, StepResult
 from rocketdrl_ma.policies.ppo.shaping import make_shaping
 from rocketdrl_ma.policies.scripted import make_scripted
 from rocketdrl_ma.rules.events import Goal
+from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS, team_log_vector
 
 TEAMS = ("blue", "orange")
 SELF = 0  # the opponent index of the learner itself
@@ -33,6 +34,7 @@ class MatchResult:
     opponent: int      # index in the opponent table
     generation: int    # the opponent slot's generation when the episode began (snapshot slots are reused)
     points: float      # the learner's team: 1 win, 0.5 draw, 0 loss
+    team: list[float]  # the learner's team's TEAM_LOG_METRICS in this match
 
 
 class SelfPlayGames:
@@ -159,9 +161,12 @@ class SelfPlayGames:
                 state = self.envs[i].game_state
                 shaping[rows] = [self.shaping[i].get(agent, state)[0] for agent in self.learners(i)]
             if ended[i]:
-                winner = infos[i][self.learners(i)[0]].get("summary", {}).get("winner")
+                summary = infos[i][self.learners(i)[0]].get("summary", {})
+                winner = summary.get("winner")
                 points = 0.5 if winner is None else float(winner == team)
-                results.append(MatchResult(i, self.opponent[i], self.generation[i], points))
+                metrics = (team_log_vector(summary["team"][team]) if "team" in summary
+                           else [float("nan")] * len(TEAM_LOG_METRICS))
+                results.append(MatchResult(i, self.opponent[i], self.generation[i], points, metrics))
                 for k in range(self.team_size):
                     row = rows.start + k
                     episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),

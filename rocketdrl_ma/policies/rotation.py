@@ -1,0 +1,157 @@
+"""Team rotation as Rocket League players play it: who challenges, who supports, who covers the goal, and where
+the cars that are not on the ball go. Pure functions of the game state, in a team's frame (the team attacks +y).
+
+Every car of a team works the roles out from the same state, so they agree without talking to each other:
+
+- **first man**: the car that reaches the ball soonest from its own side of it (a car upfield of the ball has to
+  come back around it first, and pays for that); the last toucher keeps the role while it is near the ball, so two
+  cars at about the same distance do not swap it every decision. Only the first man goes for the ball: the others
+  never drive at it, which is what keeps a team from double commits.
+- **last man**: of the others, the one nearest its own goal; it stands on the line from its goal's centre to the
+  ball, in the net when the ball is in its third, further out while the ball is away.
+- **second man** (3v3 and 4v4: everyone between): behind the ball towards the middle, ready for the follow-up.
+
+A car that is not first and has to come back (its spot is behind it) takes an active boost pad on the way when it
+is short of boost and the pad costs little of a detour: the boost collected on the way back.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+
+from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.rules.state import GameState, agent_team
+
+OWN_GOAL_Y = -C.ARENA_EXTENT_Y
+#: the speed (uu/s) the arrival-time estimate assumes, and what a car upfield of the ball pays per uu it must come
+#: back and as a fixed cost of turning round
+ESTIMATE_SPEED_UU_S = 1600.0
+WRONG_SIDE_COST_S = 0.6
+#: the last toucher keeps the first man's role while within this of the ball, at this head start
+KEEP_ROLE_WITHIN_UU, KEEP_ROLE_BONUS_S = 900.0, 0.35
+KICKOFF_TAKERS = 2  # cars that go for the ball at a kickoff
+#: the second man's spot: this far behind the ball, its x pulled this much towards the middle
+SUPPORT_BACK_UU, SUPPORT_X_SHARE = 1900.0, 0.5
+#: the last man stays this far behind the ball on its way to goal: with one team-mate (2v2), with more
+LAST_BEHIND_2V2_UU, LAST_BEHIND_UU = 1500.0, 2600.0
+GOAL_LINE_STAND_UU = 180.0  # how far in front of the goal line the last man stands at most
+#: boost on the way back: below this much boost, a pad within this detour (small pad, big pad)
+LOW_BOOST = 60.0
+DETOUR_SMALL_UU, DETOUR_BIG_UU = 500.0, 1300.0
+
+
+class Role(IntEnum):
+    FIRST = 0
+    SECOND = 1
+    LAST = 2
+
+
+@dataclass(frozen=True)
+class TeamView:
+    """One car's team in its team frame: positions and velocities of the live team-mates (the car itself included)."""
+    agents: tuple[str, ...]
+    pos: dict[str, np.ndarray]
+    vel: dict[str, np.ndarray]
+    ball_pos: np.ndarray
+    ball_vel: np.ndarray
+
+
+def frame_sign(agent: str) -> np.ndarray:
+    """Orange's team frame is the field turned half a circle: x -> -x, y -> -y."""
+    return np.ones(3) if agent_team(agent) == 0 else np.array([-1.0, -1.0, 1.0])
+
+
+def team_view(agent: str, state: GameState) -> TeamView:
+    """``agent``'s live team-mates (demoed cars are out of play) and the ball, in ``agent``'s team frame."""
+    team, sign = agent_team(agent), frame_sign(agent)
+    mates = tuple(sorted(a for a, car in state.cars.items() if agent_team(a) == team and not car.is_demoed))
+    return TeamView(mates, {a: state.cars[a].pos * sign for a in mates}, {a: state.cars[a].vel * sign for a in mates},
+                    state.ball.pos * sign, state.ball.vel * sign)
+
+
+def arrival_s(pos: np.ndarray, vel: np.ndarray, ball: np.ndarray) -> float:
+    """Rough seconds for a car to get to the ball from its own side: distance over a typical speed, less the speed it
+    already carries towards the ball, plus the way round for a car upfield of the ball."""
+    to_ball = ball[:2] - pos[:2]
+    distance = float(np.hypot(*to_ball))
+    closing = float(vel[:2] @ to_ball) / max(distance, 1.0)
+    t = distance / max(ESTIMATE_SPEED_UU_S, ESTIMATE_SPEED_UU_S + 0.5 * closing)
+    upfield = pos[1] - ball[1]
+    if upfield > 0.0:
+        t += WRONG_SIDE_COST_S + upfield / ESTIMATE_SPEED_UU_S
+    return t
+
+
+def is_kickoff(view: TeamView) -> bool:
+    """The ball waits on the centre spot."""
+    return abs(view.ball_pos[0]) < 1.0 and abs(view.ball_pos[1]) < 1.0 and float(np.linalg.norm(view.ball_vel)) < 1.0
+
+
+def assign_roles(view: TeamView, last_touch: str | None) -> dict[str, Role]:
+    """Every live team-mate's role; ties go to the lower agent name, so all team-mates reach the same answer.
+    At a kickoff the two nearest cars go: the nearer takes it, the other arrives behind it for the follow-up (a
+    ball won by the opponents' first car then meets it, not an empty field)."""
+    if not view.agents:
+        return {}
+    times = {a: arrival_s(view.pos[a], view.vel[a], view.ball_pos) for a in view.agents}
+    if is_kickoff(view):
+        by_time = sorted(view.agents, key=lambda a: (times[a], a))
+        takers = by_time[:KICKOFF_TAKERS]
+        others = sorted(by_time[KICKOFF_TAKERS:], key=lambda a: (view.pos[a][1], a))
+        return {**{a: Role.FIRST for a in takers}, **{a: Role.LAST if k == 0 else Role.SECOND for k, a in enumerate(others)}}
+    if last_touch in times and float(np.linalg.norm(view.pos[last_touch] - view.ball_pos)) < KEEP_ROLE_WITHIN_UU:
+        times[last_touch] -= KEEP_ROLE_BONUS_S
+    first = min(view.agents, key=lambda a: (times[a], a))
+    others = sorted((a for a in view.agents if a != first), key=lambda a: (view.pos[a][1], a))
+    roles = {first: Role.FIRST}
+    for k, a in enumerate(others):
+        roles[a] = Role.LAST if k == 0 else Role.SECOND
+    return roles
+
+
+def ball_ahead(view: TeamView, seconds: float = 0.8) -> np.ndarray:
+    """Where the ball is heading, ``seconds`` on in a straight line (kept inside the field): the cover spots follow
+    it, so a car covering is back before a cleared or shot ball passes it."""
+    ahead = view.ball_pos + view.ball_vel * seconds
+    return np.array([np.clip(ahead[0], -C.ARENA_EXTENT_X, C.ARENA_EXTENT_X),
+                     np.clip(ahead[1], OWN_GOAL_Y, C.ARENA_EXTENT_Y), ahead[2]])
+
+
+def cover_spot(ball: np.ndarray, behind_uu: float) -> np.ndarray:
+    """On the line from the ball to the own goal's centre, ``behind_uu`` from the ball, never behind the goal line:
+    the path the ball takes to the goal, so a car here meets a ball the opponents win."""
+    goal = np.array([0.0, OWN_GOAL_Y, 0.0])
+    to_goal = goal[:2] - ball[:2]
+    distance = float(np.hypot(*to_goal))
+    back = min(behind_uu, max(distance - GOAL_LINE_STAND_UU, 0.0))
+    xy = ball[:2] + to_goal / max(distance, 1.0) * back
+    return np.array([xy[0], max(xy[1], OWN_GOAL_Y + GOAL_LINE_STAND_UU), 0.0])
+
+
+def support_spot(ball: np.ndarray, rank: int = 1) -> np.ndarray:
+    """Behind the ball, towards the middle; a deeper supporter (``rank`` 2, 4v4) further back."""
+    y = float(np.clip(ball[1] - SUPPORT_BACK_UU * rank, OWN_GOAL_Y + 900.0, C.ARENA_EXTENT_Y - 1500.0))
+    x = float(np.clip(ball[0] * SUPPORT_X_SHARE, -C.ARENA_EXTENT_X + 900.0, C.ARENA_EXTENT_X - 900.0))
+    return np.array([x, y, 0.0])
+
+
+def boost_on_the_way(pos: np.ndarray, spot: np.ndarray, boost: float, pad_timers: np.ndarray,
+                     pads_team_frame: np.ndarray) -> np.ndarray | None:
+    """The active pad worth a detour on the way from ``pos`` back to ``spot`` (None: drive straight there): only when
+    short of boost and coming back (the pad not upfield of the car), the one with the least detour."""
+    if boost >= LOW_BOOST:
+        return None
+    direct = float(np.hypot(*(spot - pos)[:2]))
+    best, best_cost = None, np.inf
+    for k in np.flatnonzero(pad_timers <= 0.0):
+        pad = pads_team_frame[k]
+        if pad[1] > pos[1] + 200.0:
+            continue
+        detour = float(np.hypot(*(pad - pos)[:2]) + np.hypot(*(spot - pad)[:2])) - direct
+        allowed = DETOUR_BIG_UU if C.BOOST_PAD_IS_BIG[k] else DETOUR_SMALL_UU
+        cost = detour - (600.0 if C.BOOST_PAD_IS_BIG[k] else 0.0)
+        if detour < allowed and cost < best_cost:
+            best, best_cost = pad, cost
+    return None if best is None else np.array([best[0], best[1], 0.0])
