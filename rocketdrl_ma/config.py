@@ -15,6 +15,7 @@ import yaml
 
 from rocketdrl_ma.rules import GAME_MODES
 from rocketdrl_ma.rules.rewards import check_weights
+from rocketdrl_ma.validation import reject_unknown
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 
@@ -68,9 +69,7 @@ def optional_section(name: str, section: object, defaults: dict[str, Any]) -> di
         raise ValueError(f"{name}: expected a mapping with {sorted(defaults)}, got {section!r}")
     if not section:
         return {}
-    unknown = sorted(set(section) - set(defaults))
-    if unknown:
-        raise ValueError(f"{name}: unknown key(s) {unknown}; allowed: {sorted(defaults)}")
+    reject_unknown(name, section, defaults)
     return {**defaults, **section}
 
 
@@ -106,9 +105,7 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         raise ValueError(f"mode: unknown game mode {mode!r}; allowed: {sorted(GAME_MODES)}")
     params = mode_parameters(mode)
     allowed = {"mode", *ENV_DEFAULTS, *params}
-    unknown = sorted(set(raw) - allowed)
-    if unknown:
-        raise ValueError(f"config: unknown key(s) {unknown} for mode {mode!r}; allowed: {sorted(allowed)}")
+    reject_unknown(f"config (mode {mode!r})", raw, allowed)
     cfg: dict[str, Any] = {"mode": mode}
     for key, default in {**ENV_DEFAULTS, **params}.items():
         value = raw.get(key, default)

@@ -17,8 +17,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rocketdrl_ma"
 
 #: lowest first; a unit may import its own layer's units only if they are listed together
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("physics",), ("rules",), ("config",), ("env", "rlgym"), ("__init__",), ("policies", "results"), ("server",),
-    ("web", "league"), ("commands",), ("cli",))
+    ("validation",), ("physics",), ("rules",), ("config",), ("env", "rlgym"), ("__init__",), ("policies", "results"),
+    ("server",), ("web", "league"), ("commands",), ("cli",))
 
 
 def module_name(path: Path) -> str:

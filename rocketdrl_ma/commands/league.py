@@ -37,7 +37,7 @@ def _run_league(args: argparse.Namespace) -> int:
 def _run_league_bot(args: argparse.Namespace) -> int:
     from rocketdrl_ma.server.bot import PolicyBot, local_client_settings
 
-    from rocketdrl_ma.league.config import check_name
+    from rocketdrl_ma.validation import check_name
     from rocketdrl_ma.league.remote import serve_invitations
 
     entrant = check_name("entrant", args.entrant)

@@ -28,20 +28,13 @@ from typing import Any
 import yaml
 
 from rocketdrl_ma.config import load_config, resolve_config_path
+from rocketdrl_ma.validation import check_int, check_name, reject_unknown
 
 LEAGUE_KEYS = ("name", "match", "overrides", "format", "rounds", "matches_per_pair", "seed", "results", "report",
                "server", "entrants")
 FORMATS = ("round_robin", "per_pair")
 ENTRANT_KEYS = ("name", "policy", "members", "remote")
 SERVER_KEYS = ("name", "connect", "mode", "deadline_ms", "join_timeout_s")
-NAME_CHARS = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.")
-
-
-def check_name(field: str, value: Any) -> str:
-    """Names go into match keys and Zenoh key expressions: letters, digits, ``_ - .`` only."""
-    if not isinstance(value, str) or not value or not set(value) <= NAME_CHARS:
-        raise ValueError(f"{field}: expected a non-empty name of letters, digits, '_', '-' or '.', got {value!r}")
-    return value
 
 
 @dataclass(frozen=True)
@@ -101,22 +94,10 @@ class LeagueConfig:
         return list(seen.values())
 
 
-def _positive_int(field: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise ValueError(f"{field}: expected an int >= 1, got {value!r}")
-    return value
-
-
-def _unknown(where: str, d: dict, allowed: tuple[str, ...]) -> None:
-    unknown = sorted(set(d) - set(allowed))
-    if unknown:
-        raise ValueError(f"{where}: unknown key(s) {unknown}; allowed: {sorted(allowed)}")
-
-
 def _player(where: str, d: Any) -> Player:
     if not isinstance(d, dict):
         raise ValueError(f"{where}: expected a mapping with name and policy, got {d!r}")
-    _unknown(where, d, ("name", "policy"))
+    reject_unknown(where, d, ("name", "policy"))
     policy = d.get("policy")
     if not isinstance(policy, str) or ":" not in policy:
         raise ValueError(f"{where}.policy: expected a policy spec like 'scripted:ball_chaser' or "
@@ -128,7 +109,7 @@ def _entrant(i: int, d: Any, team_size: int) -> Entrant:
     where = f"entrants[{i}]"
     if not isinstance(d, dict):
         raise ValueError(f"{where}: expected a mapping with name and one of policy/members/remote, got {d!r}")
-    _unknown(where, d, ENTRANT_KEYS)
+    reject_unknown(where, d, ENTRANT_KEYS)
     name = check_name(f"{where}.name", d.get("name"))
     kinds = [k for k in ("policy", "members", "remote") if d.get(k) not in (None, False)]
     if len(kinds) != 1:
@@ -149,7 +130,7 @@ def _entrant(i: int, d: Any, team_size: int) -> Entrant:
 def validate_league_config(raw: Any) -> LeagueConfig:
     if not isinstance(raw, dict):
         raise ValueError(f"league config: expected a mapping, got {type(raw).__name__}")
-    _unknown("league config", raw, LEAGUE_KEYS)
+    reject_unknown("league config", raw, LEAGUE_KEYS)
     name = check_name("name", raw.get("name"))
     match = raw.get("match")
     if not isinstance(match, str):
@@ -169,8 +150,8 @@ def validate_league_config(raw: Any) -> LeagueConfig:
     fmt = raw.get("format", "round_robin")
     if fmt not in FORMATS:
         raise ValueError(f"format: {fmt!r} is not one of {list(FORMATS)}")
-    rounds = _positive_int("rounds", raw.get("rounds", 1))
-    per_pair = _positive_int("matches_per_pair", raw.get("matches_per_pair", 2))
+    rounds = check_int("rounds", raw.get("rounds", 1), minimum=1)
+    per_pair = check_int("matches_per_pair", raw.get("matches_per_pair", 2), minimum=1)
     seed = raw.get("seed", 0)
     if isinstance(seed, bool) or not isinstance(seed, int):
         raise ValueError(f"seed: expected an int, got {seed!r}")
@@ -202,7 +183,7 @@ def _server(d: Any) -> ServerLink:
         return ServerLink()
     if not isinstance(d, dict):
         raise ValueError(f"server: expected a mapping with {list(SERVER_KEYS)}, got {d!r}")
-    _unknown("server", d, SERVER_KEYS)
+    reject_unknown("server", d, SERVER_KEYS)
     connect = d.get("connect", ServerLink.connect)
     if not isinstance(connect, (list, tuple)) or not connect or not all(isinstance(c, str) for c in connect):
         raise ValueError(f"server.connect: expected a list of Zenoh endpoints like 'tcp/127.0.0.1:7447', "

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .protocol import check_name
+from rocketdrl_ma.validation import check_name
 from .settings import SERVER_USER
 
 ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",

@@ -23,11 +23,12 @@ from typing import Any
 
 from rocketdrl_ma.config import load_config
 from rocketdrl_ma.results import MatchResult, ResultsStore
+from rocketdrl_ma.validation import check_name
 
 from .access import acl_config, read_users_file
 from .crypto import NONCE_BYTES, ServerIdentity, load_or_create_secret, random_bytes, request_mac, same_mac
 from .match import INTERNAL_ERROR, JoinRequest, MatchRunner
-from .protocol import (ENDED_STATUSES, MAX_REQUEST_BYTES, Keys, ProtocolError, check_name, pack, seal, unpack,
+from .protocol import (ENDED_STATUSES, MAX_REQUEST_BYTES, Keys, ProtocolError, pack, seal, unpack,
                        unpack_map)
 from .settings import SERVER_USER, MatchOptions, ServerSettings
 

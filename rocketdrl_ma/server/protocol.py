@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from enum import StrEnum
 from typing import Any
 
@@ -39,6 +38,7 @@ from rocketdrl_ma.physics import PRESETS, BallState, CarConfig, CarControls, Car
 from rocketdrl_ma.physics.car_config import WheelPair
 from rocketdrl_ma.rules.events import GameEvent, events_from_dicts
 from rocketdrl_ma.rules.state import GameState, Obstacle
+from rocketdrl_ma.validation import check_name
 
 from .crypto import MAC_BYTES, ServerIdentity, ServerKey, action_mac
 
@@ -48,7 +48,6 @@ MAX_ACTION_BYTES = 64 * 1024
 #: the largest lobby request, and what Zenoh itself reassembles (``transport/link/rx/max_message_size``)
 MAX_REQUEST_BYTES = 1024 * 1024
 MAX_MESSAGE_BYTES = MAX_REQUEST_BYTES + 64 * 1024
-_NAME = re.compile(r"^[A-Za-z0-9_\-]{1,64}$")
 _ND_KINDS = "biuf"  # bool, signed, unsigned, float: never objects, strings or void
 _CAR_FIELDS = tuple(f.name for f in dataclasses.fields(CarState))
 _CONTROL_FIELDS = tuple(f.name for f in dataclasses.fields(CarControls))
@@ -73,13 +72,6 @@ class ProtocolError(ValueError):
 
 class VersionError(ProtocolError):
     """A message of another protocol version."""
-
-
-def check_name(field: str, value: Any) -> str:
-    """Server names, users, match ids and slots become key-expression chunks: letters, digits, ``_``, ``-``."""
-    if not isinstance(value, str) or not _NAME.match(value):
-        raise ValueError(f"{field}: expected 1-64 letters, digits, '_' or '-', got {value!r}")
-    return value
 
 
 class Keys:

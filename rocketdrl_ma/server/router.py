@@ -14,7 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from .access import acl_config, read_users_file
-from .settings import SERVER_USER, ServerSettings, ZenohSettings, _load_yaml, _unknown
+from rocketdrl_ma.validation import reject_unknown
+
+from .settings import SERVER_USER, ServerSettings, ZenohSettings, _load_yaml
 
 
 @dataclass(frozen=True)
@@ -24,7 +26,7 @@ class RouterSettings:
 
     @classmethod
     def from_dict(cls, d: dict) -> "RouterSettings":
-        _unknown("router", d, ["zenoh", "serves"])
+        reject_unknown("router", d, ["zenoh", "serves"])
         if "zenoh" not in d:
             raise ValueError("router: needs a 'zenoh' section (mode: router)")
         zenoh = d["zenoh"] if isinstance(d["zenoh"], ZenohSettings) else ZenohSettings.from_dict(d["zenoh"])

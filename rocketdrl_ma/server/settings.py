@@ -29,7 +29,9 @@ from typing import Any
 
 import yaml
 
-from .protocol import MAX_MESSAGE_BYTES, check_name
+from rocketdrl_ma.validation import as_mapping, check_name, reject_unknown
+
+from .protocol import MAX_MESSAGE_BYTES
 
 ZENOH_MODES = ("peer", "client", "router")
 MATCH_MODES = ("lockstep", "realtime")
@@ -40,20 +42,6 @@ DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 DEFAULT_USER = "guest"  # a client without Zenoh authentication (loopback): just a name, proves nothing
 _SECURE_PROTOCOLS = ("tls", "quic")
 _CONFIG_NAME = re.compile(r"^([A-Za-z0-9_\-]+)/([A-Za-z0-9_\-]+)\.ya?ml$")
-
-
-def _unknown(section: str, given: dict, allowed) -> None:
-    unknown = sorted(set(given) - set(allowed))
-    if unknown:
-        raise ValueError(f"{section}: unknown key(s) {unknown}; allowed: {sorted(allowed)}")
-
-
-def _mapping(section: str, value: Any) -> dict:
-    if value is None:
-        return {}
-    if not isinstance(value, dict):
-        raise ValueError(f"{section}: expected a mapping, got {value!r}")
-    return dict(value)
 
 
 def _endpoint_host(endpoint: str) -> str:
@@ -120,7 +108,7 @@ class ZenohSettings:
     @classmethod
     def from_dict(cls, d: dict | None) -> "ZenohSettings":
         d = dict(d or {})
-        _unknown("zenoh", d, [f.name for f in fields(cls)])
+        reject_unknown("zenoh", d, [f.name for f in fields(cls)])
         for key in ("listen", "connect"):
             if d.get(key) is not None:
                 if not (isinstance(d[key], (list, tuple)) and all(isinstance(e, str) for e in d[key])):
@@ -234,11 +222,11 @@ class AccessSettings:
 
     @classmethod
     def from_dict(cls, d: Any) -> "AccessSettings":
-        d = _mapping("access", d)
-        _unknown("access", d, [f.name for f in fields(cls)])
+        d = as_mapping("access", d)
+        reject_unknown("access", d, [f.name for f in fields(cls)])
         if d.get("users_file") is not None and not isinstance(d["users_file"], str):
             raise ValueError(f"access.users_file: expected a file path, got {d['users_file']!r}")
-        roles = _mapping("access.roles", d.get("roles"))
+        roles = as_mapping("access.roles", d.get("roles"))
         for user, role in roles.items():
             check_name("access.roles user", user)
             if user == SERVER_USER:
@@ -295,8 +283,8 @@ class Limits:
 
     @classmethod
     def from_dict(cls, d: Any) -> "Limits":
-        d = _mapping("limits", d)
-        _unknown("limits", d, [f.name for f in fields(cls)])
+        d = as_mapping("limits", d)
+        reject_unknown("limits", d, [f.name for f in fields(cls)])
         for f in fields(cls):
             if f.name not in d:
                 continue
@@ -385,7 +373,7 @@ class MatchOptions:
     def from_dict(cls, d: dict, base: "MatchOptions | None" = None) -> "MatchOptions":
         if not isinstance(d, dict):
             raise ValueError(f"match options: expected a mapping, got {type(d).__name__}")
-        _unknown("match options", d, [f.name for f in fields(cls)])
+        reject_unknown("match options", d, [f.name for f in fields(cls)])
         options = replace(base or cls(), **d)
         options.check()
         return options
@@ -435,7 +423,7 @@ class ServerSettings:
     @classmethod
     def from_dict(cls, d: dict) -> "ServerSettings":
         d = dict(d or {})
-        _unknown("server", d, [f.name for f in fields(cls)])
+        reject_unknown("server", d, [f.name for f in fields(cls)])
         check_name("name", d.get("name", cls.name))
         if "zenoh" in d and not isinstance(d["zenoh"], ZenohSettings):
             d["zenoh"] = ZenohSettings.from_dict(d["zenoh"])
@@ -529,7 +517,7 @@ class ClientSettings:
     @classmethod
     def from_dict(cls, d: dict) -> "ClientSettings":
         d = dict(d or {})
-        _unknown("client", d, [f.name for f in fields(cls)])
+        reject_unknown("client", d, [f.name for f in fields(cls)])
         check_name("server", d.get("server", cls.server))
         if "zenoh" in d and not isinstance(d["zenoh"], ZenohSettings):
             d["zenoh"] = ZenohSettings.from_dict(d["zenoh"])

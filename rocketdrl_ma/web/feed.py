@@ -16,7 +16,8 @@ from typing import Any, Callable
 from rocketdrl_ma.rules.events import GameEvent
 from rocketdrl_ma.rules.state import GameState
 from rocketdrl_ma.server.client import LobbyClient, SealedStream, ServerError, ServerGone
-from rocketdrl_ma.server.protocol import Keys, MatchStatus, ProtocolError, check_name, decode_events, decode_state, unpack
+from rocketdrl_ma.server.protocol import Keys, MatchStatus, ProtocolError, decode_events, decode_state, unpack
+from rocketdrl_ma.validation import check_name
 from rocketdrl_ma.server.settings import ZenohSettings
 
 from .training import TrainingKeys

@@ -21,7 +21,8 @@ import time
 from pathlib import Path
 
 from rocketdrl_ma.policies.base import Policy
-from rocketdrl_ma.server.protocol import MatchStatus, check_name, encode_state, pack
+from rocketdrl_ma.server.protocol import MatchStatus, encode_state, pack
+from rocketdrl_ma.validation import check_name
 from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
 
 log = logging.getLogger(__name__)

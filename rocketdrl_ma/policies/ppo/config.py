@@ -41,6 +41,7 @@ from typing import Any
 import yaml
 
 from rocketdrl_ma.config import load_config, optional_section, resolve_config_path
+from rocketdrl_ma.validation import check_bool, check_choice, check_int, check_number, reject_unknown
 
 from rocketdrl_ma.policies.ppo.selfplay.config import check_selfplay
 
@@ -91,58 +92,33 @@ POSITIVE_INTS = ("n_envs", "batch_size", "buffer_size", "num_epoch", "hidden_uni
 UNIT_INTERVAL = ("lambd", "gamma")
 
 
-def _check_number(key: str, value: Any, kind: type) -> None:
-    ok = isinstance(value, (int, float)) if kind is float else isinstance(value, int)
-    if isinstance(value, bool) or not ok:
-        raise ValueError(f"{key}: expected {'a number' if kind is float else 'an int'}, got {value!r}")
-
-
 def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
     """Defaults filled in and every value checked; ValueError names the bad key and the allowed ones."""
     if not isinstance(raw, dict):
         raise ValueError(f"training config: expected a mapping of keys to values, got {type(raw).__name__}")
-    unknown = sorted(set(raw) - set(TRAIN_DEFAULTS))
-    if unknown:
-        raise ValueError(f"training config: unknown key(s) {unknown}; allowed: {sorted(TRAIN_DEFAULTS)}")
+    reject_unknown("training config", raw, TRAIN_DEFAULTS)
     cfg = {**TRAIN_DEFAULTS, **raw}
     if not isinstance(cfg["env"], str):
         raise ValueError(f"env: expected the path of a match or minigame YAML, got {cfg['env']!r}")
     if not isinstance(cfg["env_overrides"], dict):
         raise ValueError(f"env_overrides: expected a mapping of env keys to values, got {cfg['env_overrides']!r}")
     for key in POSITIVE_INTS:
-        _check_number(key, cfg[key], int)
-        if cfg[key] < 1:
-            raise ValueError(f"{key}: must be >= 1, got {cfg[key]}")
-    _check_number("seed", cfg["seed"], int)
-    for key in ("learning_rate", "beta", "epsilon", "lambd", "gamma", "strength", "init_std"):
-        _check_number(key, cfg[key], float)
-        cfg[key] = float(cfg[key])
+        check_int(key, cfg[key], minimum=1)
+    check_int("seed", cfg["seed"])
     for key in UNIT_INTERVAL:
-        if not 0.0 <= cfg[key] <= 1.0:
-            raise ValueError(f"{key}: must be in [0, 1], got {cfg[key]}")
+        cfg[key] = check_number(key, cfg[key], 0.0, 1.0)
     for key in ("learning_rate", "epsilon", "init_std"):
-        if cfg[key] <= 0.0:
-            raise ValueError(f"{key}: must be > 0, got {cfg[key]}")
-    if cfg["beta"] < 0.0:
-        raise ValueError(f"beta: must be >= 0, got {cfg['beta']}")
-    if cfg["learning_rate_schedule"] not in SCHEDULES:
-        raise ValueError(f"learning_rate_schedule: {cfg['learning_rate_schedule']!r} is not one of {list(SCHEDULES)}")
-    if cfg["device"] not in DEVICES:
-        raise ValueError(f"device: {cfg['device']!r} is not one of {list(DEVICES)}")
-    if cfg["features"] not in FEATURES:
-        raise ValueError(f"features: {cfg['features']!r} is not one of {list(FEATURES)}")
-    if not isinstance(cfg["normalize"], bool):
-        raise ValueError(f"normalize: expected true or false, got {cfg['normalize']!r}")
-    if cfg["n_workers"] is not None:
-        _check_number("n_workers", cfg["n_workers"], int)
-        if cfg["n_workers"] < 0:
-            raise ValueError(f"n_workers: must be >= 0 (0: no worker processes) or null (one per core), "
-                             f"got {cfg['n_workers']}")
-    if not isinstance(cfg["async"], bool):
-        raise ValueError(f"async: expected true or false, got {cfg['async']!r}")
-    _check_number("watch_every", cfg["watch_every"], int)
-    if cfg["watch_every"] < 0:
-        raise ValueError(f"watch_every: must be >= 0 (0: no evaluation episodes to watch), got {cfg['watch_every']}")
+        cfg[key] = check_number(key, cfg[key], above=0.0)
+    cfg["beta"] = check_number("beta", cfg["beta"], minimum=0.0)
+    cfg["strength"] = check_number("strength", cfg["strength"])
+    check_choice("learning_rate_schedule", cfg["learning_rate_schedule"], SCHEDULES)
+    check_choice("device", cfg["device"], DEVICES)
+    check_choice("features", cfg["features"], FEATURES)
+    check_bool("normalize", cfg["normalize"])
+    if cfg["n_workers"] is not None:  # 0: no worker processes; null: one per core
+        check_int("n_workers", cfg["n_workers"], minimum=0)
+    check_bool("async", cfg["async"])
+    check_int("watch_every", cfg["watch_every"], minimum=0)  # 0: no evaluation episodes to watch
     if not (isinstance(cfg["watch_connect"], list) and all(isinstance(e, str) for e in cfg["watch_connect"])):
         raise ValueError(f"watch_connect: expected a list of Zenoh endpoints, got {cfg['watch_connect']!r}")
     if not isinstance(cfg["watch_server"], str):
@@ -164,12 +140,8 @@ def _check_curriculum(curriculum: object) -> dict[str, float]:
     if not out:
         return out
     for key, value in out.items():
-        _check_number(f"curriculum.{key}", value, float)
-        if not 0.0 <= value <= 1.0:
-            raise ValueError(f"curriculum.{key}: must be in [0, 1], got {value}")
-        out[key] = float(value)
-    if out["step"] <= 0.0:
-        raise ValueError(f"curriculum.step: must be > 0, got {out['step']}")
+        out[key] = check_number(f"curriculum.{key}", value, 0.0, 1.0)
+    check_number("curriculum.step", out["step"], above=0.0)
     return out
 
 

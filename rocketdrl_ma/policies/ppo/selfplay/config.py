@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import Any
 
 from rocketdrl_ma.config import optional_section
+from rocketdrl_ma.validation import check_choice, check_int, check_number
 
 from .imitation import check_imitate
 from .kickstart import check_kickstart
@@ -36,20 +37,10 @@ def check_selfplay(section: object) -> dict[str, Any]:
     if not out:
         return out
     for key in ("snapshot_interval", "pool_size", "window"):
-        value = out[key]
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ValueError(f"selfplay.{key}: expected an int >= 1, got {value!r}")
-    for key in ("self_play", "p"):
-        value = out[key]
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"selfplay.{key}: expected a number, got {value!r}")
-        out[key] = float(value)
-    if not 0.0 <= out["self_play"] <= 1.0:
-        raise ValueError(f"selfplay.self_play: must be in [0, 1], got {out['self_play']}")
-    if out["p"] <= 0.0:
-        raise ValueError(f"selfplay.p: must be > 0, got {out['p']}")
-    if out["weighting"] not in WEIGHTINGS:
-        raise ValueError(f"selfplay.weighting: {out['weighting']!r} is not one of {list(WEIGHTINGS)}")
+        check_int(f"selfplay.{key}", out[key], minimum=1)
+    out["self_play"] = check_number("selfplay.self_play", out["self_play"], 0.0, 1.0)
+    out["p"] = check_number("selfplay.p", out["p"], above=0.0)
+    check_choice("selfplay.weighting", out["weighting"], WEIGHTINGS)
     bots = out["scripted"]
     if not isinstance(bots, list) or any(b not in SCRIPTED_BOTS for b in bots):
         raise ValueError(f"selfplay.scripted: expected a list of scripted bots from {sorted(SCRIPTED_BOTS)}, "
