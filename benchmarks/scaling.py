@@ -5,12 +5,14 @@ this project had before its rollout workers, in the same run.
 Columns per config: ``before`` (that trainer, checked out from git at ``--baseline`` into a temporary folder),
 ``in-process`` (today's trainer, ``n_workers: 0``), then for N workers ``collect N`` (the rollout workers and the
 policy alone, no learning) and ``train N`` (full training), and the efficiency throughput(N) / (N x
-throughput(1)). Every cell runs in its own process; speeds count from the first batch on (process and worker
+throughput(1)); with ``--ray``, ``ray N`` is full training with N workers on a real local Ray cluster of N nodes
+(``ray start`` on 127.0.0.1, one CPU each, as in ``tests/ray_cluster.py``) and ``ray / train N`` its ratio to
+local processes. Every cell runs in its own process; speeds count from the first batch on (process and worker
 start-up left out). Self-play configs run without their imitation warm start (minutes of cloning before the
 first step). The figures move with whatever else runs on the machine: the load average is printed.
 
 Run from the repo root: ``nice -n 5 .venv/bin/python benchmarks/scaling.py [--configs policies/penalty_tuned.yaml]
-[--workers 1 2] [--iterations 8] [--baseline REF]``
+[--workers 1 2] [--iterations 8] [--baseline REF] [--ray]``
 """
 from __future__ import annotations
 
@@ -24,12 +26,15 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+from ray_cluster import LocalRayCluster  # noqa: E402  (the tests' real local cluster)
 CONFIGS = ("policies/selfplay_1v1.yaml", "policies/penalty_tuned.yaml")
 
 CELL = r"""
 import json, sys, time
 from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
 kind, config, workers, iterations, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
+ray = sys.argv[6] if len(sys.argv) > 6 else None
 raw = load_train_config(config)
 if raw.get("selfplay"):
     raw["selfplay"] = {**raw["selfplay"], "imitate": {}}
@@ -52,7 +57,7 @@ elif kind == "train":
     from rocketdrl_ma.policies.ppo import train
     from rocketdrl_ma.policies.ppo.workers import WorkerPlan
     cfg = validate_train_config({**raw, "max_steps": (iterations + 1) * raw["buffer_size"]})
-    result = train(cfg, out + "/final.pt", out, progress=False, workers=WorkerPlan(workers))
+    result = train(cfg, out + "/final.pt", out, progress=False, workers=WorkerPlan(workers, ray=ray))
     print(json.dumps({"rate": result.steps_per_s, "learner": result.learner_share}))
 else:  # collect: the rollout workers and the policy, no learning
     import torch
@@ -102,11 +107,11 @@ def default_baseline() -> str:
     return f"{added[-1]}^" if added else "HEAD"
 
 
-def cell(kind: str, config: str, workers: int, iterations: int, pythonpath: Path) -> dict:
+def cell(kind: str, config: str, workers: int, iterations: int, pythonpath: Path, ray: str | None = None) -> dict:
     with tempfile.TemporaryDirectory() as out:
         env = {**os.environ, "PYTHONPATH": str(pythonpath), "RL_WARNINGS": "0"}
-        proc = subprocess.run([sys.executable, "-c", CELL, kind, config, str(workers), str(iterations), out],
-                              cwd=pythonpath, env=env, capture_output=True, text=True)
+        proc = subprocess.run([sys.executable, "-c", CELL, kind, config, str(workers), str(iterations), out,
+                               *([ray] if ray else [])], cwd=pythonpath, env=env, capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"{kind} {config} {workers}: {proc.stderr[-2000:]}")
         return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -119,6 +124,8 @@ def main() -> None:
     parser.add_argument("--workers", nargs="+", type=int, default=[n for n in (1, 2, 4, 8) if n <= cores])
     parser.add_argument("--iterations", type=int, default=8, help="training iterations (buffers) per cell")
     parser.add_argument("--baseline", default=None, help="git ref of the single-process trainer to compare with")
+    parser.add_argument("--ray", action="store_true", help="also train on a local Ray cluster of N nodes")
+    parser.add_argument("--ray-port", type=int, default=6391)
     args = parser.parse_args()
     print(f"machine: {cores} cores, load average {os.getloadavg()[0]:.2f} at the start")
     with tempfile.TemporaryDirectory() as tmp:
@@ -126,8 +133,11 @@ def main() -> None:
         head = ["config", "before", "in-process"]
         for n in args.workers:
             head += [f"collect {n}", f"train {n}"]
-        head += [f"train {args.workers[-1]} / before", f"train {args.workers[-1]} / collect {args.workers[-1]}",
+        last = args.workers[-1]
+        head += [f"train {last} / before", f"train {last} / collect {last}",
                  "learner share"] + [f"efficiency train {n}" for n in args.workers[1:]]
+        if args.ray:
+            head += [f"ray {last}", f"ray / train {last}"]
         rows = []
         for config in args.configs:
             iters = args.iterations
@@ -137,11 +147,18 @@ def main() -> None:
                 r[f"collect {n}"] = cell("collect", config, n, iters, ROOT)["rate"]
                 trained = cell("train", config, n, iters, ROOT)
                 r[f"train {n}"], r[f"learner {n}"] = trained["rate"], trained["learner"]
-            last = args.workers[-1]
+            if args.ray:
+                cluster = LocalRayCluster(args.ray_port, nodes=last)
+                try:
+                    r["ray"] = cell("train", config, last, iters, ROOT, cluster.address)["rate"]
+                finally:
+                    cluster.stop()
             one = r[f"train {args.workers[0]}"] / args.workers[0]
             row = [config, *(f"{r[k]:,.0f}" for k in head[1:3 + 2 * len(args.workers)]),
                    f"{r[f'train {last}'] / r['before']:.2f}", f"{r[f'train {last}'] / r[f'collect {last}']:.2f}",
                    f"{r[f'learner {last}']:.0%}"] + [f"{r[f'train {n}'] / (n * one):.2f}" for n in args.workers[1:]]
+            if args.ray:
+                row += [f"{r['ray']:,.0f}", f"{r['ray'] / r[f'train {last}']:.2f}"]
             rows.append(row)
             print(" | ".join(row), flush=True)
     print(f"\nload average {os.getloadavg()[0]:.2f} at the end\n")

@@ -11,10 +11,10 @@ import psutil
 
 
 class LocalRayCluster:
-    """A real two-node Ray cluster on 127.0.0.1 (a head and a second node, one CPU each), started with ``ray start``
-    and stopped by the PIDs of every process that carries its own temp folder or port."""
+    """A real Ray cluster on 127.0.0.1 (a head and ``nodes - 1`` more nodes, one CPU each; two by default),
+    started with ``ray start`` and stopped by the PIDs of every process that carries its own temp folder or port."""
 
-    def __init__(self, port: int):
+    def __init__(self, port: int, nodes: int = 2):
         # Ray's Unix sockets live under its temp folder, and a socket path may not exceed 107 bytes: pytest's
         # tmp_path is too deep, a fresh folder in the system's temp directory is not
         self.port, self.temp = port, Path(tempfile.mkdtemp(prefix="ray"))
@@ -23,8 +23,9 @@ class LocalRayCluster:
                   "--node-ip-address=127.0.0.1"]
         subprocess.run([self.ray, "start", "--head", f"--port={port}", f"--temp-dir={self.temp}",
                         "--include-dashboard=false", *common], check=True, capture_output=True, timeout=120)
-        subprocess.run([self.ray, "start", f"--address=127.0.0.1:{port}", *common], check=True,
-                       capture_output=True, timeout=120)
+        for _ in range(nodes - 1):
+            subprocess.run([self.ray, "start", f"--address=127.0.0.1:{port}", *common], check=True,
+                           capture_output=True, timeout=120)
 
     @property
     def address(self) -> str:
