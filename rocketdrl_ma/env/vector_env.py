@@ -19,7 +19,6 @@ from gymnasium import spaces
 
 from rocketdrl_ma.physics import Arena, ArenaBatch
 
-from .batched_obs import BatchedTeamRelativeObs
 from .observations import TeamRelativeObs
 from .parallel_env import RocketDRLParallelEnv
 
@@ -56,8 +55,8 @@ class VectorEnv:
         # The team-relative observation (the common one) is built for every lane at once from the batch arrays.
         self._batched_obs = None
         if type(first.obs_builder) is TeamRelativeObs:
-            self._batched_obs = BatchedTeamRelativeObs(first.obs_builder, self.possible_agents, first.rules.blue_size,
-                                                       first.rules.orange_size)
+            self._batched_obs = first.obs_builder.for_batch(self.possible_agents, first.rules.blue_size,
+                                                            first.rules.orange_size)
         self._live = np.zeros(n_arenas, dtype=bool)
         self.final_obs = self._obs.copy()
 

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from rocketdrl_ma.env.observations import (ARENA_DIAGONAL, OBS_BUILDERS, CombinedObs, ObsBuilder, RaySensor,
-                                           SeedSensors, TeamRelativeObs, make_obs_builder, ray_hits)
+                                           SeedSensors, TeamRelativeObs, make_obs_builder)
+from rocketdrl_ma.env.observations.rays import ray_hits
 from rocketdrl_ma.physics import BallState, CarControls, CarState, get_preset, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, Obstacle, agent_names

@@ -7,7 +7,6 @@ from rocketdrl_ma.physics import constants as C
 from .. import events as game_events
 from .. import rewards
 from ..mutators import StateMutator
-from ..state import GameState
 from .shot import ShotMinigame, ShotSpawn, check_number, check_range
 
 #: the ball is on the floor when its centre is this close to its radius (uu)

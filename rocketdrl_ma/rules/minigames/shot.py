@@ -32,7 +32,7 @@ from .. import events as game_events
 from .. import rewards
 from ..base import Rules, ball_heading_into_goal
 from ..mutators import StateMutator
-from ..state import BLUE, ORANGE, GameState, agent_team
+from ..state import BLUE, ORANGE, agent_team
 
 #: the ball is "at the end wall" when its surface is this close to it (uu)
 END_WALL_MARGIN_UU = 20.0
