@@ -233,7 +233,7 @@ def ball_tick(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_ve
             row[_RB:_RB + 3] = -n * C.BALL_RADIUS
             row[_RC:_RC + 3] = point - car_pos[i]
             row[_MU] = C.CAR_BALL_FRICTION
-            row[_TARGET] = 0.0  # restitution 0
+            row[_TARGET] = C.CAR_BALL_RESTITUTION  # 0: no bounce-back velocity to aim for
             row[_DEPTH] = -gap if gap < 0.0 else 0.0
             row[_CAR] = i
             n_rows += 1

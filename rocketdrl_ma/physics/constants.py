@@ -24,8 +24,6 @@ GOAL_HALF_WIDTH = 892.755
 GOAL_HEIGHT = 642.775
 GOAL_DEPTH = 880.0
 GOAL_SCORE_THRESHOLD_Y = 5124.25  # plus the ball radius: the whole ball is past the line
-ARENA_FRICTION = 0.6
-ARENA_RESTITUTION = 0.3
 
 # ---------------------------------------------------------------- ball
 BALL_RADIUS = 91.25

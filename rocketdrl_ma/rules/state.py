@@ -13,8 +13,11 @@ from .events import GameEvent
 
 BLUE, ORANGE = 0, 1
 TEAM_NAMES = ("blue", "orange")
-#: The centre of the goal each team attacks (blue attacks +y), in uu: the target of the goal-directed reward and
-#: shaping terms. Shared arrays: read, never modify.
+# The two points of the goal a team attacks (blue attacks +y), in uu. Shared arrays: read, never modify.
+#: the centre of the goal mouth, on the goal line, in the team frame (orange's is mirrored): the seed's goal sensor
+ATTACKED_GOAL_MOUTH = np.array([0.0, C.ARENA_EXTENT_Y, C.GOAL_HEIGHT / 2.0])
+#: the centre of the goal box (half its depth behind the line) each team attacks, in the blue frame: the target of
+#: the goal-directed reward and shaping terms
 ATTACKED_GOAL_CENTER = {team: np.array([0.0, (1.0 if team == BLUE else -1.0) * (C.ARENA_EXTENT_Y + C.GOAL_DEPTH / 2),
                                         C.GOAL_HEIGHT / 2]) for team in (BLUE, ORANGE)}
 

@@ -21,9 +21,6 @@ BALL_VEL_SCALE = C.BALL_MAX_SPEED
 BALL_ANG_VEL_SCALE = C.BALL_MAX_ANG_SPEED
 CLOCK_SCALE_S = 300.0  # a 5-minute match
 SCORE_DIFF_SCALE = 3.0  # tanh(diff / 3)
-#: The opponent's goal centre in the team frame (blue attacks +y; orange too, after mirroring).
-ATTACK_GOAL_CENTER = np.array([0.0, C.ARENA_EXTENT_Y, C.GOAL_HEIGHT / 2.0])
-
 MIRROR = np.array([-1.0, -1.0, 1.0])  # x -> -x, y -> -y: the half-turn about z that swaps the sides
 PAD_COOLDOWN = np.where(C.BOOST_PAD_IS_BIG, C.BOOST_PAD_BIG_COOLDOWN, C.BOOST_PAD_SMALL_COOLDOWN)
 

@@ -9,9 +9,9 @@ from gymnasium import spaces
 
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.physics import constants as C
-from rocketdrl_ma.rules.state import GameState
+from rocketdrl_ma.rules.state import ATTACKED_GOAL_MOUTH, GameState
 
-from .base import ARENA_DIAGONAL, ATTACK_GOAL_CENTER, ObsBuilder, box_space, check_sizes, clip_to_space, team_sign
+from .base import ARENA_DIAGONAL, ObsBuilder, box_space, check_sizes, clip_to_space, team_sign
 
 class SeedSensors(ObsBuilder):
     """The RocketDRL seed paper's 12 general data sensors (18 numbers; 15 without the goal sensor).
@@ -40,9 +40,6 @@ class SeedSensors(ObsBuilder):
     An agent missing from ``state.cars`` observes zeros.
     """
 
-    SLOTS = ("ready_to_drive", "on_ground", "wheels_on_ground", "jumping", "boost_amount", "boosting",
-             "velocity_sign", "speed", "steer", "pitch", "yaw", "roll", "ball_local_x", "ball_local_y",
-             "ball_local_z", "ball_to_goal_x", "ball_to_goal_y", "ball_to_goal_z")
     _LOW = (0, 0, 0, 0, 0, 0, -1, 0, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1)
 
     def __init__(self, goal_sensor: bool = True):
@@ -80,7 +77,7 @@ class SeedSensors(ObsBuilder):
         out[11] = math.atan2(right[2], up[2]) / math.pi
         out[12:15] = car.rot_mat.T @ (state.ball.pos - car.pos) / ARENA_DIAGONAL
         if self.goal_sensor:
-            out[15:18] = (ATTACK_GOAL_CENTER - state.ball.pos * sign) / ARENA_DIAGONAL
+            out[15:18] = (ATTACKED_GOAL_MOUTH - state.ball.pos * sign) / ARENA_DIAGONAL
         return clip_to_space(out, self._space)
 
 
