@@ -102,6 +102,18 @@ class RocketDRLParallelEnv(ParallelEnv):
         self._frames: list[np.ndarray] = []
         self._replay = None
 
+    # ------------------------------------------------------------------ copies
+    def __getstate__(self) -> dict:
+        """``copy.deepcopy``, ``pickle`` and ``cloudpickle`` give an independent env in this env's state: its own
+        PyBullet world restored from this one's (see ``PhysicsWorld.__getstate__``), the same rules, random
+        generators and episode, so it returns the same observations and, under the same actions, the same future,
+        bit for bit. A copy does not carry the renderer (it makes its own when it first renders) or a replay being
+        recorded (that file belongs to this env)."""
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        state["_replay"] = None
+        return state
+
     @functools.lru_cache(maxsize=None)
     def observation_space(self, agent: str) -> spaces.Box:
         return self._obs_space

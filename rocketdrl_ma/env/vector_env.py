@@ -11,6 +11,7 @@ actions (same random draws); the physics of an arena in a batch matches a lone a
 """
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Any
 
@@ -44,7 +45,8 @@ class VectorEnv:
         self.batch = ArenaBatch(n_arenas)
         self.lanes = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_arenas)]
         for k, lane in enumerate(self.lanes):
-            lane.rules.arena_factory = lambda seed, k=k: self._hand_out_arena(k, seed)
+            # A partial of a bound method, not a lambda: the env pickles (copies share nothing with the original)
+            lane.rules.arena_factory = functools.partial(self._hand_out_arena, k)
         first = self.lanes[0]
         self.config = first.config
         self.tick_skip = first.tick_skip
