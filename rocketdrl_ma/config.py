@@ -8,11 +8,13 @@ the allowed ones; nothing is silently dropped or clamped.
 from __future__ import annotations
 
 import inspect
+import math
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from rocketdrl_ma.physics import PRESETS
 from rocketdrl_ma.rules import GAME_MODES
 from rocketdrl_ma.rules.rewards import check_weights
 from rocketdrl_ma.validation import reject_unknown
@@ -34,6 +36,7 @@ ENV_DEFAULTS: dict[str, Any] = {
     "info_format": "full",
 }
 INFO_FORMATS = ("full", "numeric")
+MAX_TEAM_SIZE = 4
 
 
 def shipped_root() -> Path | None:
@@ -134,6 +137,8 @@ def _check_type(key: str, value: Any, default: Any) -> None:
         ok = True
     if not ok:
         raise ValueError(f"{key}: expected {expected.__name__}, got {type(value).__name__} {value!r}")
+    if expected is float and not math.isfinite(value):  # YAML's .inf and .nan: no clock or limit is endless
+        raise ValueError(f"{key}: expected a finite number, got {value!r}")
 
 
 def load_config(config: str | Path | dict | None = None, overrides: dict | None = None) -> dict[str, Any]:
@@ -142,6 +147,9 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         raw: dict[str, Any] = {"mode": "match"}
     elif isinstance(config, dict):
         raw = dict(config)
+    elif not isinstance(config, (str, Path)):
+        raise ValueError(f"config: expected a YAML path (e.g. 'matches/1v1.yaml'), a dict or None, got "
+                         f"{type(config).__name__} {config!r}")
     else:
         raw = load_yaml_file(resolve_config_path(config)) or {}
         if not isinstance(raw, dict):
@@ -165,6 +173,10 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         if key not in ("observation", "action", "rewards"):
             _check_type(key, value, default)
         cfg[key] = value
+    if "team_size" in cfg and not 1 <= cfg["team_size"] <= MAX_TEAM_SIZE:
+        raise ValueError(f"team_size: cars per team, must be in 1..{MAX_TEAM_SIZE}, got {cfg['team_size']!r}")
+    if "car_preset" in cfg and cfg["car_preset"] not in PRESETS:
+        raise ValueError(f"car_preset: unknown car preset {cfg['car_preset']!r}; allowed: {sorted(PRESETS)}")
     if not isinstance(cfg["tick_skip"], int) or cfg["tick_skip"] < 1:
         raise ValueError(f"tick_skip: must be an int >= 1, got {cfg['tick_skip']!r}")
     if cfg["max_cycles"] is not None and (not isinstance(cfg["max_cycles"], int) or cfg["max_cycles"] < 1):

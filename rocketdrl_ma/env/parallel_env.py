@@ -39,6 +39,15 @@ def flat_numbers(tree: dict, prefix: str = "") -> dict[str, float]:
     return flat
 
 
+def check_seed(seed: object, name: str = "seed") -> int | None:
+    """A reset seed: None or an int >= 0 (NumPy's seeds), bools and floats refused with the field named."""
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"{name}: expected an int >= 0 or None, got {type(seed).__name__} {seed!r}")
+    return int(seed)
+
+
 def global_state_vector(state: GameState, agents: list[str]) -> np.ndarray:
     """The whole game in the blue frame for a centralised critic, every value scaled into [-1, 1]."""
     ball = state.ball
@@ -124,6 +133,9 @@ class RocketDRLParallelEnv(ParallelEnv):
 
     # ------------------------------------------------------------------ episode
     def reset(self, seed: int | None = None, options: dict | None = None):
+        seed = check_seed(seed)
+        if options is not None and not isinstance(options, dict):
+            raise ValueError(f"options: expected a dict or None, got {type(options).__name__} {options!r}")
         if seed is not None or self._rng is None:
             self._rng = np.random.default_rng(seed)
             self._action_space.seed(seed)
@@ -148,6 +160,9 @@ class RocketDRLParallelEnv(ParallelEnv):
         calls the two halves around one physics step of all its lanes' arenas."""
         if not self.agents:
             raise ValueError("step: the episode is over; call reset()")
+        if not isinstance(actions, dict):
+            raise ValueError(f"actions: expected a dict of agent -> action for the live agents {self.agents}, got "
+                             f"{type(actions).__name__}")
         for agent in actions:
             if agent not in self.possible_agents:
                 raise ValueError(f"actions: unknown agent {agent!r}; agents are {self.possible_agents}")

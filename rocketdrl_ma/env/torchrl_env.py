@@ -18,6 +18,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
+from .parallel_env import check_seed
 from .vector_env import VectorEnv
 
 GROUP = "agents"
@@ -63,7 +64,7 @@ class RocketDRLTorchEnv(EnvBase):
         self._started = False
 
     def _set_seed(self, seed: int | None) -> None:
-        self._next_seed = seed
+        self._next_seed = check_seed(seed)
         self._started = False  # the next reset restarts every arena from this seed
 
     def _observation(self, obs: np.ndarray) -> dict:

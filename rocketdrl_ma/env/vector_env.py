@@ -22,7 +22,7 @@ from rocketdrl_ma.physics import Arena, ArenaBatch
 
 from .batched_obs import BatchedTeamRelativeObs
 from .observations import TeamRelativeObs
-from .parallel_env import RocketDRLParallelEnv
+from .parallel_env import RocketDRLParallelEnv, check_seed
 
 
 class VectorEnv:
@@ -71,12 +71,14 @@ class VectorEnv:
     # ------------------------------------------------------------------ episodes
     def reset(self, seed: int | None = None) -> tuple[np.ndarray, list[dict]]:
         """Reset every arena (arena ``k`` with ``seed + k``); returns observations and each arena's infos."""
+        seed = check_seed(seed)
         infos = [self._reset_lane(k, None if seed is None else seed + k) for k in range(self.n_arenas)]
         return self._obs.copy(), infos
 
     def reset_arenas(self, mask: np.ndarray, seed: int | None = None) -> tuple[np.ndarray, list[dict | None]]:
         """Reset the arenas where ``mask`` ([n_arenas] bool) is set; returns all observations and the reset
         arenas' infos (None for the others)."""
+        seed = check_seed(seed)
         mask = np.asarray(mask, dtype=bool)
         if mask.shape != (self.n_arenas,):
             raise ValueError(f"mask: expected shape ({self.n_arenas},), got {mask.shape}")
