@@ -5,13 +5,15 @@ A wheel carries what a clone has beside the package, so that installed anywhere 
   ``rocketdrl_ma/data/<folder>/...``, which ``rocketdrl_ma.config.resolve_shipped_path`` falls back to;
 - the npm packages the web page imports, exactly the files the page server serves and their licences, as
   ``rocketdrl_ma/web/vendor/`` in ``node_modules``' layout, from the ``node_modules`` that ``npm ci`` installs from
-  package-lock.json (``make web-deps``). Building without them fails: the wheel's ``rocketdrl-ma web`` needs them.
+  package-lock.json (``make web-deps``; the build runs ``npm ci`` itself if they are missing and npm is there,
+  and fails if it is not: the wheel's ``rocketdrl-ma web`` needs them).
 
 An editable install (``pip install -e``) copies nothing: there the repository itself is found.
 """
 from __future__ import annotations
 
 import shutil
+import subprocess
 from pathlib import Path
 
 from setuptools import setup
@@ -48,10 +50,12 @@ class BuildPyWithData(build_py):
             if not _copy(patterns, ROOT / folder, package / "data" / folder):
                 raise SystemExit(f"build: nothing to ship from {folder}/ (run the build from the repository)")
         node_modules = ROOT / "node_modules"
+        if not (node_modules / "three" / "build" / "three.module.js").is_file() and shutil.which("npm"):
+            subprocess.run(["npm", "ci", "--no-audit", "--no-fund"], cwd=ROOT, check=True)  # as make web-deps
         copied = _copy(WEB_VENDOR, node_modules, package / "web" / "vendor")
         if not any(p.name == "three.module.js" for p in copied):
-            raise SystemExit(f"build: three.js is not in {node_modules}; run `npm ci` (make web-deps) first: the "
-                             "wheel ships the web page's three.js")
+            raise SystemExit(f"build: three.js is not in {node_modules} and npm is not installed; run `npm ci` "
+                             "(make web-deps) first: the wheel ships the web page's three.js")
 
 
 setup(cmdclass={"build_py": BuildPyWithData})

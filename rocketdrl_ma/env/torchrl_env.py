@@ -5,6 +5,9 @@ Keys (``n`` arenas, ``m`` agents in ``possible_agents`` order, all in one group 
 ``("next", "agents", "reward")`` ``[n, m, 1]``, ``state`` ``[n, state_dim]`` (the global vector for a
 centralised critic), and ``done`` / ``terminated`` / ``truncated`` ``[n, 1]``: every agent of an arena ends
 together. An arena whose game ended is reset by torchrl's partial reset (``_reset`` mask), as collectors do.
+
+The env pickles (its ``VectorEnv`` copies in its state), so a multi-process collector may be given env objects as
+well as factories: each worker steps its own copy.
 """
 from __future__ import annotations
 

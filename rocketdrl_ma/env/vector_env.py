@@ -34,6 +34,9 @@ class VectorEnv:
     With ``autoreset`` (the default) an arena whose game ended is reset at once: its row of ``obs`` is the new
     game's first observation, and ``final_obs`` keeps the last one of the ended game (``obs`` elsewhere). Without
     it an ended arena waits for ``reset_arenas`` and may not be stepped until then.
+
+    ``copy.deepcopy`` and pickling give an independent copy of every arena in its state (one new PyBullet world for
+    the copy's batch), as for ``RocketDRLParallelEnv``.
     """
 
     def __init__(self, config: str | Path | dict | None = "matches/1v1.yaml", n_arenas: int = 16,

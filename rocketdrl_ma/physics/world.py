@@ -195,12 +195,12 @@ class PhysicsWorld:
         from it goes on a little differently (float rounding) than the world it was taken from. To give the copy
         exactly this world's future, this world moves onto a fresh PyBullet world restored from the same
         snapshot too: its state is unchanged, and from here on it and every copy step identically."""
-        if self.client is None:
-            raise ValueError("PhysicsWorld: this world is closed; there is nothing to copy")
-        snapshot = self._bullet_snapshot()
-        old_client = self.client
-        self._restore_world(snapshot)
-        pb.disconnect(old_client)
+        snapshot = None
+        if self.client is not None:  # a closed world copies as a closed world
+            snapshot = self._bullet_snapshot()
+            old_client = self.client
+            self._restore_world(snapshot)
+            pb.disconnect(old_client)
         state = self.__dict__.copy()
         state["client"] = None
         state["_bullet_bytes"] = snapshot
@@ -209,7 +209,8 @@ class PhysicsWorld:
     def __setstate__(self, state: dict) -> None:
         snapshot = state.pop("_bullet_bytes")
         self.__dict__.update(state)
-        self._restore_world(snapshot)
+        if snapshot is not None:
+            self._restore_world(snapshot)
 
     def _bullet_snapshot(self) -> bytes:
         fd, path = tempfile.mkstemp(suffix=".bullet")

@@ -267,3 +267,34 @@ def test_an_arena_batch_copies_after_cars_and_boxes_came_and_went():
     clone.close()
     batch.step(1)  # the original's PyBullet world is its own
     batch.close()
+
+
+def test_the_aec_env_copies_too():
+    aec = rocketdrl_ma.env("matches/1v1.yaml", kickoff_countdown_s=0.0)
+    aec.reset(seed=3)
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        aec.step(rng.uniform(-1, 1, 8).astype(np.float32))
+    clone = copy.deepcopy(aec)
+    for _ in range(60):
+        assert clone.agent_selection == aec.agent_selection
+        np.testing.assert_array_equal(clone.observe(aec.agent_selection), aec.observe(aec.agent_selection))
+        action = rng.uniform(-1, 1, 8).astype(np.float32)
+        aec.step(action)
+        clone.step(action)
+    aec.close()
+    clone.close()
+
+
+def test_a_closed_env_copies_as_a_closed_env_that_a_reset_brings_back():
+    env = rocketdrl_ma.parallel_env("matches/1v1.yaml")
+    env.reset(seed=1)
+    env.close()
+    clone = pickle.loads(pickle.dumps(env))
+    fresh = rocketdrl_ma.parallel_env("matches/1v1.yaml")
+    obs_clone, _ = clone.reset(seed=6)
+    obs_fresh, _ = fresh.reset(seed=6)
+    np.testing.assert_array_equal(obs_clone["blue_0"], obs_fresh["blue_0"])
+    assert_same_future(clone, fresh, np.random.default_rng(0), 20)
+    clone.close()
+    fresh.close()
