@@ -16,6 +16,7 @@ import yaml
 
 from rocketdrl_ma.physics import PRESETS
 from rocketdrl_ma.rules import GAME_MODES
+from rocketdrl_ma.rules.match import check_team_size
 from rocketdrl_ma.rules.rewards import check_weights
 from rocketdrl_ma.validation import reject_unknown
 
@@ -36,7 +37,6 @@ ENV_DEFAULTS: dict[str, Any] = {
     "info_format": "full",
 }
 INFO_FORMATS = ("full", "numeric")
-MAX_TEAM_SIZE = 4
 
 
 def shipped_root() -> Path | None:
@@ -173,8 +173,10 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         if key not in ("observation", "action", "rewards"):
             _check_type(key, value, default)
         cfg[key] = value
-    if "team_size" in cfg and not 1 <= cfg["team_size"] <= MAX_TEAM_SIZE:
-        raise ValueError(f"team_size: cars per team, must be in 1..{MAX_TEAM_SIZE}, got {cfg['team_size']!r}")
+    if "team_size" in cfg:  # the sides of a match, named as the config names them (not as the rules call them)
+        for key in ("team_size", "blue_size", "orange_size"):
+            if cfg.get(key) is not None:
+                check_team_size(key, cfg[key])
     if "car_preset" in cfg and cfg["car_preset"] not in PRESETS:
         raise ValueError(f"car_preset: unknown car preset {cfg['car_preset']!r}; allowed: {sorted(PRESETS)}")
     if not isinstance(cfg["tick_skip"], int) or cfg["tick_skip"] < 1:

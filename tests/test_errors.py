@@ -69,8 +69,9 @@ def test_reset_accepts_numpy_ints_and_refuses_non_dict_options(env):
 
 
 @pytest.mark.parametrize("overrides,message", [
-    ({"team_size": 5}, "team_size: cars per team, must be in 1..4, got 5"),
-    ({"team_size": 0}, "team_size: cars per team, must be in 1..4, got 0"),
+    ({"team_size": 5}, "team_size: must be an int in 1..4 (cars on that side of a match), got 5"),
+    ({"team_size": 0}, "team_size: must be an int in 1..4 (cars on that side of a match), got 0"),
+    ({"orange_size": 7}, "orange_size: must be an int in 1..4 (cars on that side of a match), got 7"),
     ({"team_size": 2.0}, "team_size: expected int, got float 2.0"),
     ({"car_preset": "batmobile"}, "car_preset: unknown car preset 'batmobile'; allowed: ['breakout', 'dominus', "
                                   "'hybrid', 'merc', 'octane', 'plank', 'psyclops']"),
