@@ -149,7 +149,7 @@ class PhysicsWorld:
         self.origins = np.array([[(k % ARENA_GRID_COLUMNS) * ARENA_SPACING_UU,
                                   (k // ARENA_GRID_COLUMNS) * ARENA_SPACING_UU, 0.0] for k in range(n_arenas)])
         # Every body made or removed after the static world, in order: a copy of the world replays it (see
-        # __setstate__) so that its bodies have the same ids and the same order in Bullet's arrays.
+        # _restore_world) so that its bodies have the same ids and the same order in Bullet's arrays.
         self._body_log: list[tuple] = []
         self._connect()
         self._static_boxes: dict[int, np.ndarray] = {}  # PyBullet body id -> (arena, centre xyz, half extents xyz) uu
