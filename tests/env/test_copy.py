@@ -298,3 +298,27 @@ def test_a_closed_env_copies_as_a_closed_env_that_a_reset_brings_back():
     assert_same_future(clone, fresh, np.random.default_rng(0), 20)
     clone.close()
     fresh.close()
+
+
+@pytest.mark.slow
+def test_torchrl_pettingzoo_wrapper_objects_in_a_multisync_collector():
+    pytest.importorskip("torchrl")
+    os.environ.setdefault("RL_WARNINGS", "0")
+    from torchrl.collectors import MultiSyncCollector
+    from torchrl.envs import PettingZooWrapper
+
+    env = PettingZooWrapper(rocketdrl_ma.parallel_env("matches/1v1.yaml", info_format="numeric",
+                                                      kickoff_countdown_s=0.0), return_state=True, use_mask=True)
+    env.set_seed(0)
+    env.rollout(3)
+    collector = MultiSyncCollector([env, env], policy=None, frames_per_batch=20, total_frames=40)
+    try:
+        batches = [batch for batch in collector]
+    finally:
+        collector.shutdown()
+    assert len(batches) == 2 and all(b.batch_size == (2, 10) for b in batches)
+    for batch in batches:  # every worker's own world stepped: observations move within each worker's rollout
+        obs = batch.get(("next", "blue", "observation"))
+        assert (obs[:, 1:] != obs[:, :-1]).any(dim=-1).all()
+    assert env.rollout(2).batch_size == (2,)
+    env.close()
