@@ -53,9 +53,10 @@ def test_a_lookup_env_names_none_and_floats(env):
 
 @pytest.mark.parametrize("seed", [-1, 1.5, "7", True, np.float64(2.0), [1, 2]])
 def test_reset_seeds_must_be_ints_from_zero(env, seed):
-    with pytest.raises(ValueError, match=r"^seed: expected an int >= 0 or None, got "):
+    refused = r"^seed: (expected an int, got|must be >= 0, got) "
+    with pytest.raises(ValueError, match=refused):
         env.reset(seed=seed)
-    with pytest.raises(ValueError, match=r"^seed: expected an int >= 0 or None"):
+    with pytest.raises(ValueError, match=refused):
         VectorEnv("matches/1v1.yaml", n_arenas=1).reset(seed=seed)
     env.step(zeros(env))  # the episode under way goes on
 
@@ -79,7 +80,7 @@ def test_reset_accepts_numpy_ints_and_refuses_non_dict_options(env):
     ({"clock_s": float("nan")}, "clock_s: expected a finite number, got nan"),
     ({"overtime_limit_s": float("inf")}, "overtime_limit_s: expected a finite number, got inf"),
     ({"kickoff_countdown_s": "3"}, "kickoff_countdown_s: expected float, got str '3'"),
-    ({"colour": "red"}, "config: unknown key(s) ['colour'] for mode 'match'; allowed: "),
+    ({"colour": "red"}, "config (mode 'match'): unknown key(s) ['colour']; allowed: "),
 ])
 def test_bad_config_values_are_refused_when_loaded(overrides, message):
     with pytest.raises(ValueError) as e:

@@ -18,6 +18,7 @@ from pettingzoo import ParallelEnv
 from rocketdrl_ma.config import load_config, make_rules
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState
+from rocketdrl_ma.validation import check_int
 
 from .actions import make_action_parser
 from .observations import make_obs_builder
@@ -39,13 +40,11 @@ def flat_numbers(tree: dict, prefix: str = "") -> dict[str, float]:
     return flat
 
 
-def check_seed(seed: object, name: str = "seed") -> int | None:
-    """A reset seed: None or an int >= 0 (NumPy's seeds), bools and floats refused with the field named."""
+def check_seed(seed: object) -> int | None:
+    """A reset seed: None or an int >= 0 (NumPy's seeds; a NumPy integer too), bools and floats refused."""
     if seed is None:
         return None
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"{name}: expected an int >= 0 or None, got {type(seed).__name__} {seed!r}")
-    return int(seed)
+    return check_int("seed", int(seed) if isinstance(seed, np.integer) else seed, minimum=0)
 
 
 def global_state_vector(state: GameState, agents: list[str]) -> np.ndarray:

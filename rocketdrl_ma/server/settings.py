@@ -27,7 +27,6 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-
 from rocketdrl_ma.config import load_yaml_file, resolve_shipped_path
 from rocketdrl_ma.validation import as_mapping, check_name, reject_unknown
 
