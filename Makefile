@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench venv clean web-deps browser
+.PHONY: demo test test-fast bench venv clean web-deps browser wheel
 
 venv: $(STAMP)
 
@@ -29,6 +29,10 @@ $(NODE_STAMP): package.json package-lock.json
 	npm ci --no-audit --no-fund
 	touch $(NODE_STAMP)
 
+# The wheel (dist/): the package with the shipped configs, checkpoints and the page's three.js (setup.py).
+wheel: $(STAMP) $(NODE_STAMP)
+	$(PY) -m pip wheel --no-deps -w dist .
+
 # The browser of tests/web: Debian's chromium (Playwright drives it; no `playwright install`).
 browser:
 	command -v chromium >/dev/null || (apt-get update && apt-get install -y --no-install-recommends chromium)
@@ -47,4 +51,4 @@ bench: $(STAMP)
 	$(PY) benchmarks/fidelity.py
 
 clean:
-	rm -rf $(VENV) build *.egg-info node_modules
+	rm -rf $(VENV) build dist *.egg-info node_modules

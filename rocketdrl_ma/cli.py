@@ -1,7 +1,8 @@
-"""Command line: ``rocketdrl-ma play | serve | bot | watch | web | train | eval | league``.
+"""Command line: ``rocketdrl-ma play | configs | serve | bot | watch | web | train | eval | league``.
 
 ``play`` runs a full match of a config between scripted bots, headless, with a progress bar, and prints
-the final score and the events (``make demo`` runs a 1v1 with a one-minute clock). The other commands
+the final score and the events (``make demo`` runs a 1v1 with a one-minute clock); ``configs`` lists the
+configs and checkpoints that ship with the package (or prints one). The other commands
 live in ``rocketdrl_ma.commands``, one module per area: each in ``COMMAND_MODULES`` has ``add_commands(subparsers)``,
 which adds its subcommands with ``set_defaults(run=function)``; ``run(args)`` returns the exit code.
 Those modules must import only the standard library at their top, so ``--help`` stays fast.
@@ -68,6 +69,30 @@ def _run_play(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_configs(args: argparse.Namespace) -> int:
+    from rocketdrl_ma.config import resolve_shipped_path, shipped_files, shipped_root
+    if args.name:
+        try:
+            print(resolve_shipped_path(args.name).read_text(), end="")
+        except ValueError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        return 0
+    root = shipped_root()
+    if root is None:
+        print("error: no shipped configs found (a broken install?)", file=sys.stderr)
+        return 2
+    print(f"shipped configs and checkpoints (in {root}); any of these names works from any folder, and a file "
+          "of that name in the working directory wins:")
+    folder = None
+    for name in shipped_files((".yaml", ".pt")):
+        if name.split("/")[0] != folder:
+            folder = name.split("/")[0]
+            print(f"{folder}/")
+        print(f"  {name}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="rocketdrl-ma")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -79,6 +104,10 @@ def main(argv: list[str] | None = None) -> int:
     p_play.add_argument("--clock", type=float, default=None, help="override the match clock (s)")
     p_play.add_argument("--seed", type=int, default=0)
     p_play.set_defaults(run=_run_play)
+    p_configs = sub.add_parser("configs", help="list the shipped configs and checkpoints, or print one")
+    p_configs.add_argument("name", nargs="?", default=None,
+                           help="print this one (e.g. matches/1v1.yaml) to copy and edit it")
+    p_configs.set_defaults(run=_run_configs)
     for module in COMMAND_MODULES:
         importlib.import_module(module).add_commands(sub)
     args = parser.parse_args(argv)

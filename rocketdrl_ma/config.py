@@ -8,16 +8,25 @@ the allowed ones; nothing is silently dropped or clamped.
 from __future__ import annotations
 
 import inspect
+import math
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from rocketdrl_ma.physics import PRESETS
 from rocketdrl_ma.rules import GAME_MODES
+from rocketdrl_ma.rules.match import check_team_size
 from rocketdrl_ma.rules.rewards import check_weights
 from rocketdrl_ma.validation import reject_unknown
 
-REPO_ROOT = Path(__file__).resolve().parent.parent
+PACKAGE_DIR = Path(__file__).resolve().parent
+REPO_ROOT = PACKAGE_DIR.parent
+#: The top-level folders that ship with the package: game, server, training and league configs, and the trained
+#: checkpoints the README uses (``policies/checkpoints``).
+SHIPPED_FOLDERS = ("matches", "minigames", "server", "policies", "leagues")
+#: Where a wheel carries them (``setup.py`` copies them there at build time).
+WHEEL_DATA_DIR = PACKAGE_DIR / "data"
 
 ENV_DEFAULTS: dict[str, Any] = {
     "tick_skip": 8,
@@ -30,13 +39,59 @@ ENV_DEFAULTS: dict[str, Any] = {
 INFO_FORMATS = ("full", "numeric")
 
 
-def resolve_config_path(path: str | Path) -> Path:
-    """A config path as given, else relative to the repository (``matches/1v1.yaml`` works from anywhere)."""
+def shipped_root() -> Path | None:
+    """The folder holding the shipped folders: ``rocketdrl_ma/data`` in an installed wheel, the repository's top
+    level in a clone (an editable install included); None if neither is there."""
+    if WHEEL_DATA_DIR.is_dir():
+        return WHEEL_DATA_DIR
+    if (REPO_ROOT / "pyproject.toml").is_file() and (REPO_ROOT / "matches").is_dir():
+        return REPO_ROOT
+    return None
+
+
+def resolve_shipped_path(path: str | Path, what: str = "config") -> Path:
+    """A file as given if it exists, else the shipped file of that name (``matches/1v1.yaml``,
+    ``policies/checkpoints/penalty_tuned.pt``), the same from a clone and from an installed wheel. ``what`` names
+    the field in the error."""
     p = Path(path)
-    for candidate in (p, REPO_ROOT / p):
-        if candidate.is_file():
+    if p.is_file():
+        return p
+    root = shipped_root()
+    if root is not None and not p.is_absolute():
+        candidate = (root / p).resolve()
+        if candidate.is_file() and candidate.is_relative_to(root.resolve()):
             return candidate
-    raise ValueError(f"config: no such file {str(path)!r} (looked in the working directory and {REPO_ROOT})")
+    raise ValueError(f"{what}: no such file {str(path)!r} in the working directory or among the shipped files "
+                     f"(`rocketdrl-ma configs` lists them)")
+
+
+def resolve_config_path(path: str | Path) -> Path:
+    """A config path as given, else the shipped config of that name (``matches/1v1.yaml`` works from anywhere)."""
+    return resolve_shipped_path(path, "config")
+
+
+def load_yaml_file(path: str | Path, what: str = "config") -> Any:
+    """The YAML document in ``path``; a syntax error is a ValueError naming ``what``, the file, line and column."""
+    try:
+        text = Path(path).read_text()
+    except OSError as e:
+        raise ValueError(f"{what}: cannot read {str(path)!r}: {e.strerror}") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"{path}, line {mark.line + 1}, column {mark.column + 1}" if mark is not None else str(path)
+        problem = " ".join(part for part in (getattr(e, "context", None), getattr(e, "problem", None)) if part)
+        raise ValueError(f"{what}: YAML syntax error in {where}: {problem or e}") from None
+
+
+def shipped_files(suffixes: tuple[str, ...] = (".yaml",)) -> list[str]:
+    """The shipped files with these suffixes, as the names that resolve to them (``matches/1v1.yaml``)."""
+    root = shipped_root()
+    if root is None:
+        return []
+    return sorted(f.relative_to(root).as_posix() for folder in SHIPPED_FOLDERS if (root / folder).is_dir()
+                  for f in (root / folder).rglob("*") if f.is_file() and f.suffix in suffixes)
 
 
 def mode_parameters(mode: str) -> dict[str, Any]:
@@ -82,6 +137,8 @@ def _check_type(key: str, value: Any, default: Any) -> None:
         ok = True
     if not ok:
         raise ValueError(f"{key}: expected {expected.__name__}, got {type(value).__name__} {value!r}")
+    if expected is float and not math.isfinite(value):  # YAML's .inf and .nan: no clock or limit is endless
+        raise ValueError(f"{key}: expected a finite number, got {value!r}")
 
 
 def load_config(config: str | Path | dict | None = None, overrides: dict | None = None) -> dict[str, Any]:
@@ -90,9 +147,11 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         raw: dict[str, Any] = {"mode": "match"}
     elif isinstance(config, dict):
         raw = dict(config)
+    elif not isinstance(config, (str, Path)):
+        raise ValueError(f"config: expected a YAML path (e.g. 'matches/1v1.yaml'), a dict or None, got "
+                         f"{type(config).__name__} {config!r}")
     else:
-        with open(resolve_config_path(config)) as f:
-            raw = yaml.safe_load(f) or {}
+        raw = load_yaml_file(resolve_config_path(config)) or {}
         if not isinstance(raw, dict):
             raise ValueError(f"config: {config} must hold a mapping of keys to values")
     for key, value in (overrides or {}).items():
@@ -114,6 +173,12 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         if key not in ("observation", "action", "rewards"):
             _check_type(key, value, default)
         cfg[key] = value
+    if "team_size" in cfg:  # the sides of a match, named as the config names them (not as the rules call them)
+        for key in ("team_size", "blue_size", "orange_size"):
+            if cfg.get(key) is not None:
+                check_team_size(key, cfg[key])
+    if "car_preset" in cfg and cfg["car_preset"] not in PRESETS:
+        raise ValueError(f"car_preset: unknown car preset {cfg['car_preset']!r}; allowed: {sorted(PRESETS)}")
     if not isinstance(cfg["tick_skip"], int) or cfg["tick_skip"] < 1:
         raise ValueError(f"tick_skip: must be an int >= 1, got {cfg['tick_skip']!r}")
     if cfg["max_cycles"] is not None and (not isinstance(cfg["max_cycles"], int) or cfg["max_cycles"] < 1):

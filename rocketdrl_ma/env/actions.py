@@ -27,6 +27,8 @@ RANGE_TOLERANCE = 1e-6
 def _vector(agent: str, action, size: int) -> list[float]:
     """The action's ``size`` numbers, checked and clipped onto [-1, 1], as Python floats (a handful of values:
     plain Python is quicker here than NumPy's per-call overhead)."""
+    if action is None:
+        raise ValueError(f"action for {agent}: expected {size} numbers in [-1, 1], got None")
     try:
         arr = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError):

@@ -18,6 +18,7 @@ from pettingzoo import ParallelEnv
 from rocketdrl_ma.config import load_config, make_rules
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState
+from rocketdrl_ma.validation import check_int
 
 from .actions import make_action_parser
 from .observations import make_obs_builder
@@ -37,6 +38,13 @@ def flat_numbers(tree: dict, prefix: str = "") -> dict[str, float]:
         elif isinstance(value, (bool, int, float, np.number)):
             flat[name] = float(value)
     return flat
+
+
+def check_seed(seed: object) -> int | None:
+    """A reset seed: None or an int >= 0 (NumPy's seeds; a NumPy integer too), bools and floats refused."""
+    if seed is None:
+        return None
+    return check_int("seed", int(seed) if isinstance(seed, np.integer) else seed, minimum=0)
 
 
 def global_state_vector(state: GameState, agents: list[str]) -> np.ndarray:
@@ -102,6 +110,18 @@ class RocketDRLParallelEnv(ParallelEnv):
         self._frames: list[np.ndarray] = []
         self._replay = None
 
+    # ------------------------------------------------------------------ copies
+    def __getstate__(self) -> dict:
+        """``copy.deepcopy``, ``pickle`` and ``cloudpickle`` give an independent env in this env's state: its own
+        PyBullet world restored from this one's (see ``PhysicsWorld.__getstate__``), the same rules, random
+        generators and episode, so it returns the same observations and, under the same actions, the same future,
+        bit for bit. A copy does not carry the renderer (it makes its own when it first renders) or a replay being
+        recorded (that file belongs to this env)."""
+        state = self.__dict__.copy()
+        state["_renderer"] = None
+        state["_replay"] = None
+        return state
+
     @functools.lru_cache(maxsize=None)
     def observation_space(self, agent: str) -> spaces.Box:
         return self._obs_space
@@ -112,6 +132,9 @@ class RocketDRLParallelEnv(ParallelEnv):
 
     # ------------------------------------------------------------------ episode
     def reset(self, seed: int | None = None, options: dict | None = None):
+        seed = check_seed(seed)
+        if options is not None and not isinstance(options, dict):
+            raise ValueError(f"options: expected a dict or None, got {type(options).__name__} {options!r}")
         if seed is not None or self._rng is None:
             self._rng = np.random.default_rng(seed)
             self._action_space.seed(seed)
@@ -136,6 +159,9 @@ class RocketDRLParallelEnv(ParallelEnv):
         calls the two halves around one physics step of all its lanes' arenas."""
         if not self.agents:
             raise ValueError("step: the episode is over; call reset()")
+        if not isinstance(actions, dict):
+            raise ValueError(f"actions: expected a dict of agent -> action for the live agents {self.agents}, got "
+                             f"{type(actions).__name__}")
         for agent in actions:
             if agent not in self.possible_agents:
                 raise ValueError(f"actions: unknown agent {agent!r}; agents are {self.possible_agents}")

@@ -5,6 +5,9 @@ Keys (``n`` arenas, ``m`` agents in ``possible_agents`` order, all in one group 
 ``("next", "agents", "reward")`` ``[n, m, 1]``, ``state`` ``[n, state_dim]`` (the global vector for a
 centralised critic), and ``done`` / ``terminated`` / ``truncated`` ``[n, 1]``: every agent of an arena ends
 together. An arena whose game ended is reset by torchrl's partial reset (``_reset`` mask), as collectors do.
+
+The env pickles (its ``VectorEnv`` copies in its state), so a multi-process collector may be given env objects as
+well as factories: each worker steps its own copy.
 """
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ from tensordict import TensorDict, TensorDictBase
 from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
+from .parallel_env import check_seed
 from .vector_env import VectorEnv
 
 GROUP = "agents"
@@ -63,7 +67,7 @@ class RocketDRLTorchEnv(EnvBase):
         self._started = False
 
     def _set_seed(self, seed: int | None) -> None:
-        self._next_seed = seed
+        self._next_seed = check_seed(seed)
         self._started = False  # the next reset restarts every arena from this seed
 
     def _observation(self, obs: np.ndarray) -> dict:

@@ -11,6 +11,7 @@ actions (same random draws); the physics of an arena in a batch matches a lone a
 """
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +21,7 @@ from gymnasium import spaces
 from rocketdrl_ma.physics import Arena, ArenaBatch
 
 from .observations import TeamRelativeObs
-from .parallel_env import RocketDRLParallelEnv
+from .parallel_env import RocketDRLParallelEnv, check_seed
 
 
 class VectorEnv:
@@ -32,6 +33,9 @@ class VectorEnv:
     With ``autoreset`` (the default) an arena whose game ended is reset at once: its row of ``obs`` is the new
     game's first observation, and ``final_obs`` keeps the last one of the ended game (``obs`` elsewhere). Without
     it an ended arena waits for ``reset_arenas`` and may not be stepped until then.
+
+    ``copy.deepcopy`` and pickling give an independent copy of every arena in its state (one new PyBullet world for
+    the copy's batch), as for ``RocketDRLParallelEnv``.
     """
 
     def __init__(self, config: str | Path | dict | None = "matches/1v1.yaml", n_arenas: int = 16,
@@ -43,7 +47,8 @@ class VectorEnv:
         self.batch = ArenaBatch(n_arenas)
         self.lanes = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_arenas)]
         for k, lane in enumerate(self.lanes):
-            lane.rules.arena_factory = lambda seed, k=k: self._hand_out_arena(k, seed)
+            # A partial of a bound method, not a lambda: the env pickles (copies share nothing with the original)
+            lane.rules.arena_factory = functools.partial(self._hand_out_arena, k)
         first = self.lanes[0]
         self.config = first.config
         self.tick_skip = first.tick_skip
@@ -68,12 +73,14 @@ class VectorEnv:
     # ------------------------------------------------------------------ episodes
     def reset(self, seed: int | None = None) -> tuple[np.ndarray, list[dict]]:
         """Reset every arena (arena ``k`` with ``seed + k``); returns observations and each arena's infos."""
+        seed = check_seed(seed)
         infos = [self._reset_lane(k, None if seed is None else seed + k) for k in range(self.n_arenas)]
         return self._obs.copy(), infos
 
     def reset_arenas(self, mask: np.ndarray, seed: int | None = None) -> tuple[np.ndarray, list[dict | None]]:
         """Reset the arenas where ``mask`` ([n_arenas] bool) is set; returns all observations and the reset
         arenas' infos (None for the others)."""
+        seed = check_seed(seed)
         mask = np.asarray(mask, dtype=bool)
         if mask.shape != (self.n_arenas,):
             raise ValueError(f"mask: expected shape ({self.n_arenas},), got {mask.shape}")

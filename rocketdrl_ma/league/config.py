@@ -25,9 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from rocketdrl_ma.config import load_config, resolve_config_path
+from rocketdrl_ma.config import load_config, load_yaml_file, resolve_shipped_path
 from rocketdrl_ma.validation import check_int, check_name, reject_unknown
 
 LEAGUE_KEYS = ("name", "match", "overrides", "format", "rounds", "matches_per_pair", "seed", "results", "report",
@@ -202,9 +200,8 @@ def _server(d: Any) -> ServerLink:
 
 
 def load_league_config(path: str | Path, overrides: dict | None = None) -> LeagueConfig:
-    """A league YAML (from the working directory or the repository); ``overrides`` replace its top-level keys."""
-    with open(resolve_config_path(path)) as f:
-        raw = yaml.safe_load(f) or {}
+    """A league YAML (as given, else the shipped one); ``overrides`` replace its top-level keys."""
+    raw = load_yaml_file(resolve_shipped_path(path, "league config"), "league config") or {}
     if not isinstance(raw, dict):
         raise ValueError(f"league config: {path} must hold a mapping of keys to values")
     return validate_league_config({**raw, **(overrides or {})})

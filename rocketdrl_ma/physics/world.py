@@ -11,6 +11,9 @@ calls, which use metres.
 from __future__ import annotations
 
 import math
+import os
+import tempfile
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -143,18 +146,12 @@ class PhysicsWorld:
         # Each arena's own random stream (respawn spots, unseeded kickoffs); all share ``rng`` unless given their
         # own, which makes an arena of a batch draw exactly what a lone Arena with that seed draws.
         self.arena_rngs: list[np.random.Generator] = [self.rng] * n_arenas
-        self.client = pb.connect(pb.DIRECT)
-        cid = self.client
-        pb.setGravity(0, 0, C.GRAVITY_Z * M_PER_UU, physicsClientId=cid)
-        # RocketSim's solver: 10 iterations, no restitution under 10 uu/s. (Its overlap correction, 0.8 a tick by
-        # split impulse, is not PyBullet's to set: contactERP 0.8 feeds a velocity bias here, which made cars leave
-        # walls faster than they came.)
-        pb.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=0, numSolverIterations=10,
-                                     deterministicOverlappingPairs=1, restitutionVelocityThreshold=10.0 * M_PER_UU,
-                                     contactERP=0.0, physicsClientId=cid)
         self.origins = np.array([[(k % ARENA_GRID_COLUMNS) * ARENA_SPACING_UU,
                                   (k // ARENA_GRID_COLUMNS) * ARENA_SPACING_UU, 0.0] for k in range(n_arenas)])
-        self._build_static_world()
+        # Every body made or removed after the static world, in order: a copy of the world replays it (see
+        # _restore_world) so that its bodies have the same ids and the same order in Bullet's arrays.
+        self._body_log: list[tuple] = []
+        self._connect()
         self._static_boxes: dict[int, np.ndarray] = {}  # PyBullet body id -> (arena, centre xyz, half extents xyz) uu
         self._box_rows = np.zeros((0, 7))  # the same, stacked for the ball kernel
         self.ball_pos = np.zeros((n_arenas, 3))
@@ -176,6 +173,79 @@ class PhysicsWorld:
             self.set_ball(k, np.array([0.0, 0.0, C.BALL_REST_Z]), np.zeros(3), np.zeros(3))
 
     # ------------------------------------------------------------------ construction
+    def _connect(self) -> None:
+        """A PyBullet world of its own with this world's settings and static bodies."""
+        self.client = pb.connect(pb.DIRECT)
+        cid = self.client
+        pb.setGravity(0, 0, self._mutators[0].gravity_z_uu_s2 * M_PER_UU, physicsClientId=cid)
+        # RocketSim's solver: 10 iterations, no restitution under 10 uu/s. (Its overlap correction, 0.8 a tick by
+        # split impulse, is not PyBullet's to set: contactERP 0.8 feeds a velocity bias here, which made cars leave
+        # walls faster than they came.)
+        pb.setPhysicsEngineParameter(fixedTimeStep=self.dt, numSubSteps=0, numSolverIterations=10,
+                                     deterministicOverlappingPairs=1, restitutionVelocityThreshold=10.0 * M_PER_UU,
+                                     contactERP=0.0, physicsClientId=cid)
+        self._build_static_world()
+
+    # ------------------------------------------------------------------ copies (copy.deepcopy, pickle)
+    def __getstate__(self) -> dict:
+        """Everything but the PyBullet connection, plus the PyBullet world as a ``.bullet`` snapshot (transforms,
+        velocities, the contact cache that warm-starts the next solve).
+
+        A snapshot does not hold all of Bullet's internals (e.g. the broadphase's history), so a world restored
+        from it goes on a little differently (float rounding) than the world it was taken from. To give the copy
+        exactly this world's future, this world moves onto a fresh PyBullet world restored from the same
+        snapshot too: its state is unchanged, and from here on it and every copy step identically."""
+        snapshot = None
+        if self.client is not None:  # a closed world copies as a closed world
+            snapshot = self._bullet_snapshot()
+            old_client = self.client
+            self._restore_world(snapshot)
+            pb.disconnect(old_client)
+        state = self.__dict__.copy()
+        state["client"] = None
+        state["_bullet_bytes"] = snapshot
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        snapshot = state.pop("_bullet_bytes")
+        self.__dict__.update(state)
+        if snapshot is not None:
+            self._restore_world(snapshot)
+
+    def _bullet_snapshot(self) -> bytes:
+        fd, path = tempfile.mkstemp(suffix=".bullet")
+        os.close(fd)
+        try:
+            pb.saveBullet(path, physicsClientId=self.client)
+            return Path(path).read_bytes()
+        finally:
+            os.unlink(path)
+
+    def _restore_world(self, snapshot: bytes) -> None:
+        """Connect to a new PyBullet world: the static world, the logged bodies made again in their order (so they
+        get the same ids), then ``snapshot`` restored onto them."""
+        kept = {key: getattr(self, key) for key in ("_static_bodies", "_static_set", "_body_log")}
+        self._body_log = []
+        self._connect()
+        for entry in kept["_body_log"]:
+            if entry[0] == "car":
+                body = self._create_car_body(entry[2], entry[3])
+            elif entry[0] == "box":
+                body = self._create_box_body(entry[2], entry[3], entry[4])
+            else:
+                self._remove_body(entry[1])
+                continue
+            if body != entry[1]:
+                raise RuntimeError(f"PhysicsWorld copy: body {entry[1]} came back as {body}")
+        self.__dict__.update(kept)
+        fd, path = tempfile.mkstemp(suffix=".bullet")
+        try:
+            os.write(fd, snapshot)
+            os.close(fd)
+            pb.restoreState(fileName=path, physicsClientId=self.client)
+        finally:
+            os.unlink(path)
+
     def _build_static_world(self) -> None:
         cid = self.client
         verts, idx = arena_mesh(with_floor_and_ceiling=False)  # the planes below are the floor and ceiling
@@ -200,15 +270,7 @@ class PhysicsWorld:
         if team not in (0, 1):
             raise ValueError(f"team: must be 0 (blue) or 1 (orange), got {team!r}")
         cfg = get_preset(config) if isinstance(config, str) else config
-        cid = self.client
-        half = [(s * 0.5 - CAR_CONTACT_SHRINK) * M_PER_UU for s in cfg.hitbox_size]
-        shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half,
-                                        collisionFramePosition=[o * M_PER_UU for o in cfg.hitbox_offset],
-                                        physicsClientId=cid)
-        start = self.origins[arena] + np.array([0.0, 0.0, C.CAR_SPAWN_REST_Z])
-        body = pb.createMultiBody(C.CAR_MASS, shape, basePosition=(start * M_PER_UU).tolist(),
-                                  useMaximalCoordinates=True, physicsClientId=cid)
-        self._set_car_dynamics(body, cfg)
+        body = self._create_car_body(arena, cfg)
         slot = _CarSlot(self._next_car_id, arena, team, cfg, body)
         self._next_car_id += 1
         self._state_fresh = False  # the arrays are rebuilt from the bodies
@@ -222,6 +284,19 @@ class PhysicsWorld:
         self._read_state()
         return slot.car_id
 
+    def _create_car_body(self, arena: int, cfg: CarConfig) -> int:
+        cid = self.client
+        half = [(s * 0.5 - CAR_CONTACT_SHRINK) * M_PER_UU for s in cfg.hitbox_size]
+        shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half,
+                                        collisionFramePosition=[o * M_PER_UU for o in cfg.hitbox_offset],
+                                        physicsClientId=cid)
+        start = self.origins[arena] + np.array([0.0, 0.0, C.CAR_SPAWN_REST_Z])
+        body = pb.createMultiBody(C.CAR_MASS, shape, basePosition=(start * M_PER_UU).tolist(),
+                                  useMaximalCoordinates=True, physicsClientId=cid)
+        self._set_car_dynamics(body, cfg)
+        self._body_log.append(("car", body, arena, cfg))
+        return body
+
     def _set_car_dynamics(self, body: int, cfg: CarConfig) -> None:
         pb.changeDynamics(body, -1, mass=C.CAR_MASS, localInertiaDiagonal=cfg.inertia_diag.tolist(),
                           lateralFriction=CAR_FRICTION, restitution=CAR_RESTITUTION, linearDamping=0.0,
@@ -232,7 +307,7 @@ class PhysicsWorld:
         slot = self._slot(car_id)
         self._read_state()
         old = self._snapshot_car_arrays()
-        pb.removeBody(slot.body, physicsClientId=self.client)
+        self._remove_body(slot.body)
         self._slots.remove(slot)
         del self._slot_by_body[slot.body]
         del self._slot_by_id[car_id]
@@ -570,16 +645,25 @@ class PhysicsWorld:
         half = _box_vector("half_extents_uu", half_extents_uu)
         if np.any(half <= 0.0):
             raise ValueError(f"half_extents_uu: must all be > 0, got {half.tolist()}")
+        body = self._create_box_body(arena, center, half)
+        self._static_set.add(body)  # cars touching it count as touching the arena (auto-flip, auto-roll)
+        self._static_boxes[body] = np.concatenate(([arena], center, half))
+        self._stack_boxes()
+        return body
+
+    def _create_box_body(self, arena: int, center: np.ndarray, half: np.ndarray) -> int:
         cid = self.client
         shape = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=(half * M_PER_UU).tolist(), physicsClientId=cid)
         body = pb.createMultiBody(0, shape, basePosition=((center + self.origins[arena]) * M_PER_UU).tolist(),
                                   physicsClientId=cid)
         pb.changeDynamics(body, -1, lateralFriction=1.0, restitution=1.0, rollingFriction=0.0,
                           spinningFriction=0.0, physicsClientId=cid)
-        self._static_set.add(body)  # cars touching it count as touching the arena (auto-flip, auto-roll)
-        self._static_boxes[body] = np.concatenate(([arena], center, half))
-        self._stack_boxes()
+        self._body_log.append(("box", body, arena, center.copy(), half.copy()))
         return body
+
+    def _remove_body(self, body: int) -> None:
+        pb.removeBody(body, physicsClientId=self.client)
+        self._body_log.append(("remove", body))
 
     def _stack_boxes(self) -> None:
         self._box_rows = np.array(list(self._static_boxes.values()), dtype=np.float64).reshape(-1, 7)
@@ -599,7 +683,7 @@ class PhysicsWorld:
 
     def remove_static_box(self, box_id: int) -> None:
         self._static_box_arena(box_id)
-        pb.removeBody(box_id, physicsClientId=self.client)
+        self._remove_body(box_id)
         self._static_set.discard(box_id)
         del self._static_boxes[box_id]
         self._stack_boxes()

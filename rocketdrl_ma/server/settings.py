@@ -27,8 +27,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from rocketdrl_ma.config import load_yaml_file, resolve_shipped_path
 from rocketdrl_ma.validation import as_mapping, check_name, reject_unknown
 
 from .protocol import MAX_MESSAGE_BYTES
@@ -465,10 +464,8 @@ class ServerSettings:
 
 
 def _load_yaml(path: str | Path, what: str) -> dict:
-    p = Path(path)
-    if not p.is_file():
-        raise ValueError(f"{what}: no such file {str(path)!r}")
-    raw = yaml.safe_load(p.read_text()) or {}
+    p = resolve_shipped_path(path, what)  # as given, else the shipped one (server/local.yaml from any folder)
+    raw = load_yaml_file(p, what) or {}
     if not isinstance(raw, dict):
         raise ValueError(f"{what}: {path} must hold a mapping")
     return raw

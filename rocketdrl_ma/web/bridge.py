@@ -36,6 +36,7 @@ from .replays import ReplayLibrary
 
 log = logging.getLogger(__name__)
 STATIC_DIR = Path(__file__).parent / "static"
+PACKAGED_VENDOR_DIR = Path(__file__).parent / "vendor"  # in a wheel: the page's npm files, node_modules' layout
 MAX_STATES_PER_S = 30.0
 MAX_REQUEST_BYTES = 64 * 1024
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
@@ -44,9 +45,9 @@ CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; c
 
 
 def find_node_modules(extra: list[Path] = ()) -> Path:
-    """The ``node_modules`` holding three.js: given, the repository's (``npm ci`` there), or the working
-    directory's."""
-    for folder in [*extra, REPO_ROOT / "node_modules", Path.cwd() / "node_modules"]:
+    """The ``node_modules`` holding three.js: given, the copy an installed wheel carries (``setup.py``), the
+    repository's (``npm ci`` there), or the working directory's."""
+    for folder in [*extra, PACKAGED_VENDOR_DIR, REPO_ROOT / "node_modules", Path.cwd() / "node_modules"]:
         if (folder / "three" / "build" / "three.module.js").is_file():
             return folder
     raise ValueError("web: three.js is not installed; run `npm ci` in the repository (or `make web-deps`), or "

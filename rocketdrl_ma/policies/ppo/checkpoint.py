@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from rocketdrl_ma.config import REPO_ROOT, load_config
+from rocketdrl_ma.config import load_config, resolve_shipped_path
 from rocketdrl_ma.env.actions import make_action_parser
 from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.policies.base import ObservingPolicy
@@ -56,12 +56,8 @@ def save_checkpoint(path: str | Path, model: PPOModel, meta: dict[str, Any],
 
 
 def resolve_checkpoint(path: str | Path) -> Path:
-    """A checkpoint path as given, else relative to the repository."""
-    p = Path(path)
-    for candidate in (p, REPO_ROOT / p):
-        if candidate.is_file():
-            return candidate
-    raise ValueError(f"checkpoint: no such file {str(path)!r} (looked in the working directory and {REPO_ROOT})")
+    """A checkpoint path as given, else the shipped checkpoint of that name (``policies/checkpoints/...``)."""
+    return resolve_shipped_path(path, "checkpoint")
 
 
 def read_meta(path: str | Path) -> dict[str, Any]:

@@ -38,9 +38,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from rocketdrl_ma.config import load_config, optional_section, resolve_config_path
+from rocketdrl_ma.config import load_config, load_yaml_file, optional_section, resolve_shipped_path
 from rocketdrl_ma.validation import check_bool, check_choice, check_int, check_number, reject_unknown
 
 from rocketdrl_ma.policies.ppo.selfplay.config import check_selfplay
@@ -146,9 +144,8 @@ def _check_curriculum(curriculum: object) -> dict[str, float]:
 
 
 def load_train_config(path: str | Path, overrides: dict[str, Any] | None = None) -> dict[str, Any]:
-    """A training YAML (resolved like env configs: from the working directory or the repository)."""
-    with open(resolve_config_path(path)) as f:
-        raw = yaml.safe_load(f) or {}
+    """A training YAML (resolved like env configs: as given, else the shipped one)."""
+    raw = load_yaml_file(resolve_shipped_path(path, "training config"), "training config") or {}
     if not isinstance(raw, dict):
         raise ValueError(f"training config: {path} must hold a mapping of keys to values")
     return validate_train_config({**raw, **(overrides or {})})
