@@ -1,6 +1,7 @@
 """A real local Ray cluster for the tests that train or play leagues on Ray."""
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 import sys
@@ -32,11 +33,13 @@ class LocalRayCluster:
         return f"127.0.0.1:{self.port}"
 
     def processes(self) -> list[psutil.Process]:
-        marks = (str(self.temp), f"127.0.0.1:{self.port}", f"--gcs-address=127.0.0.1:{self.port}")
+        # Ray's client server names the head by the machine's own address, not 127.0.0.1: match the port alone
+        on_port = re.compile(rf":{self.port}(?!\d)")
         found = []
         for proc in psutil.process_iter(["cmdline"]):
             cmdline = " ".join(proc.info["cmdline"] or ())
-            if any(mark in cmdline for mark in marks) and proc.pid != psutil.Process().pid:
+            if (str(self.temp) in cmdline or "ray" in cmdline and on_port.search(cmdline)) \
+                    and proc.pid != psutil.Process().pid:
                 found.append(proc)
         return found
 
