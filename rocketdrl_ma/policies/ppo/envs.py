@@ -8,7 +8,8 @@ episodes (return, length, success) and the final observation of every row whose 
 ``autoreset`` (the default) a copy that ends is reset at once and its rows carry the next episode's first
 observation, without it the rows keep their final observation until ``reset_copies`` (what a torchrl env's
 partial reset needs, ``rollout.py``). With ``shaping`` weights the pool also returns the potential-based
-shaping term of each row (``shaping.py``).
+shaping term of each row (``shaping.py``); with a ``teacher`` (a scripted bot's name), ``teacher_actions``
+labels every row's current state with the bot's action (kickstarting, ``policies/selfplay/kickstart.py``).
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from gymnasium import spaces
 
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.env.vector_env import VectorEnv
+from rocketdrl_ma.policies.scripted import make_scripted
 
 from .shaping import potential
 
@@ -58,7 +60,7 @@ class EnvPool:
     """``n_envs`` copies of a PettingZoo env, stepped together as the arenas of one ``VectorEnv``."""
 
     def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None,
-                 shaping: dict[str, float] | None = None, autoreset: bool = True):
+                 shaping: dict[str, float] | None = None, autoreset: bool = True, teacher: str | None = None):
         overrides = {**(overrides or {}), "info_format": "full"}
         self.vec = VectorEnv(config, n_arenas=n_envs, autoreset=False, **overrides)
         self.envs: list[RocketDRLParallelEnv] = self.vec.lanes
@@ -73,6 +75,8 @@ class EnvPool:
         self.shaping = dict(shaping or {})
         self._phi = np.zeros(self.n_rows)
         self.autoreset = autoreset
+        # one teacher per copy: a bot may remember the game it is playing
+        self.teachers = [make_scripted(teacher) for _ in self.envs] if teacher else []
 
     def _rows(self, i: int) -> slice:
         return slice(i * len(self.agents), (i + 1) * len(self.agents))
@@ -130,6 +134,11 @@ class EnvPool:
             obs[rows] = new_obs[i]
             self._phi[rows] = self._potentials(self.envs[int(i)])
         return obs
+
+    def teacher_actions(self) -> np.ndarray:
+        """The teacher's action (in the env's action format) for every row in its current state."""
+        return np.asarray([env.action_parser.encode(self.teachers[i].act(agent, env.game_state))
+                           for i, env in enumerate(self.envs) for agent in self.agents])
 
     def _potentials(self, env: RocketDRLParallelEnv) -> list[float]:
         if not self.shaping:
