@@ -52,9 +52,10 @@ def check_imitate(section: object, name: str = "selfplay.imitate") -> dict[str, 
 
 
 def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: int, seed: int,
-            model: PPOModel | None = None, bot_share: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+            model: PPOModel | None = None, bot_share: float = 1.0,
+            side: str = "alternate") -> tuple[np.ndarray, np.ndarray]:
     """(observations, actions of ``bot``) over ``decisions`` env decisions, the recorded car on alternating
-    sides. Without ``model`` the bot drives and a mirror match (``opponent == bot``) records both cars;
+    sides (``side``: always that team, as a learner with ``selfplay.side`` plays). Without ``model`` the bot drives and a mirror match (``opponent == bot``) records both cars;
     with it (DAgger) ``model`` drives greedily, the bot in its stead with probability ``bot_share`` per
     decision, and the bot's action is recorded as the label of every state. A game with one team (a
     minigame's shooter) has no sides: the bot plays, and is recorded for, every car of every episode."""
@@ -62,16 +63,17 @@ def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: in
     player, other = make_scripted(bot), make_scripted(opponent)
     rng = np.random.default_rng(seed)
     one_team = len({agent.rpartition("_")[0] for agent in env.possible_agents}) == 1
+    sides = ("blue", "orange") if side == "alternate" else (side,)
     obs_rows, act_rows = [], []
     episode = 0
     obs, _ = env.reset(seed=seed)
     try:
         for _ in range(decisions):
             state = env.game_state
-            side = ("blue", "orange")[episode % 2]
+            recorded = sides[episode % len(sides)]
             actions = {}
             for agent in env.agents:
-                mine = one_team or agent.startswith(side) or (model is None and opponent == bot)
+                mine = one_team or agent.startswith(recorded) or (model is None and opponent == bot)
                 label = env.action_parser.encode((player if mine else other).act(agent, state))
                 actions[agent] = label
                 if mine:
@@ -133,7 +135,9 @@ def warm_start(model: PPOModel, cfg: dict[str, Any], log: Callable[[str], None] 
     run its DAgger rounds. Returns the first fit's epoch losses and, per round, the clone's disagreement with
     the bot on the states it visited itself (measured before that round's refit)."""
     spec, seed = spec if spec is not None else cfg["selfplay"]["imitate"], cfg["seed"]
-    obs, actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"], spec["decisions"], seed)
+    side = cfg["selfplay"]["side"] if cfg["selfplay"] else "alternate"
+    obs, actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"], spec["decisions"], seed,
+                           side=side)
     losses = clone(model, obs, actions, spec["epochs"], seed=seed)
     if log:
         log(f"imitation: cloned {spec['bot']} on {len(obs):,} samples, loss {losses[0]:.3f} -> {losses[-1]:.3f}")
@@ -141,7 +145,7 @@ def warm_start(model: PPOModel, cfg: dict[str, Any], log: Callable[[str], None] 
     for k in range(spec["dagger_rounds"]):
         bot_share = 0.5 ** (k + 1)
         new_obs, new_actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"],
-                                       spec["dagger_decisions"], seed + 1 + k, model, bot_share)
+                                       spec["dagger_decisions"], seed + 1 + k, model, bot_share, side)
         rounds.append(disagreement(model, new_obs, new_actions))
         obs, actions = np.concatenate([obs, new_obs]), np.concatenate([actions, new_actions])
         clone(model, obs, actions, DAGGER_EPOCHS, seed=seed + 1 + k, fit_normaliser=False)
