@@ -1,5 +1,5 @@
-"""``rocketdrl-ma train CONFIG``, ``eval CHECKPOINT --episodes N`` and ``curves RUN_DIR...`` (standard library
-at the top, so ``--help`` stays fast)."""
+"""``rocketdrl-ma train CONFIG``, ``eval CHECKPOINT --episodes N``, ``curves RUN_DIR...`` and ``duel CONFIG CONFIG``
+(standard library at the top, so ``--help`` stays fast)."""
 from __future__ import annotations
 
 import argparse
@@ -52,6 +52,20 @@ def _run_curves(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_duel(args: argparse.Namespace) -> int:
+    from rocketdrl_ma.policies.duel import duel
+    from rocketdrl_ma.policies.ppo import load_train_config
+    from rocketdrl_ma.policies.ppo.trainer import worker_plan
+
+    learners = {Path(path).stem: load_train_config(path) for path in args.configs}
+    if len(learners) != len(args.configs):
+        raise ValueError(f"configs: two learners need two differently named YAMLs, got {args.configs}")
+    plan = worker_plan(next(iter(learners.values())), args.workers)
+    for phase in duel(learners, args.root, args.cycles, args.phase_steps, plan, progress=not args.quiet):
+        print(f"cycle {phase.cycle}  {phase.learner:<24} {phase.agent_steps:>10,d} agent steps  {phase.checkpoint}")
+    return 0
+
+
 def add_commands(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("train", help="train a PPO policy (torchrl) from a training YAML, e.g. policies/penalty.yaml")
     p.add_argument("config", help="training YAML: ML-Agents PPO keys plus env, env_overrides, n_envs, seed")
@@ -81,3 +95,13 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--out", required=True, help="PNG to write")
     c.add_argument("--title", default="")
     c.set_defaults(run=_run_curves)
+    d = sub.add_parser("duel", help="train two self-play learners in turn against each other's snapshots "
+                                    "(the penalty duel's shooter and keeper)")
+    d.add_argument("configs", nargs="+", help="one training YAML per learner, each with selfplay.side; the first "
+                                              "trains first")
+    d.add_argument("--cycles", type=int, default=6)
+    d.add_argument("--phase-steps", type=int, default=500_000, help="agent steps of each learner per phase")
+    d.add_argument("--root", default="runs/penalty_duel", help="learner NAME runs in ROOT/NAME (resumed if there)")
+    d.add_argument("--workers", type=int, default=None, help="rollout worker processes (as for train)")
+    d.add_argument("--quiet", action="store_true", help="no progress bar")
+    d.set_defaults(run=_run_duel)

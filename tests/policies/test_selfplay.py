@@ -38,8 +38,12 @@ def test_selfplay_section_is_validated():
         validate_train_config({**raw, "selfplay": {"weighting": "easy"}})
     with pytest.raises(ValueError, match="selfplay.self_play"):
         validate_train_config({**raw, "selfplay": {"self_play": 1.5}})
-    with pytest.raises(ValueError, match="selfplay: needs a match"):
+    with pytest.raises(ValueError, match="selfplay: needs a game with two teams"):
         SelfPlayGames(validate_train_config({**raw, "env": "minigames/penalty.yaml", "env_overrides": {}}), 1)
+    with pytest.raises(ValueError, match=r"selfplay.side: 'keeper' is not one of \['alternate', 'blue', 'orange'\]"):
+        validate_train_config({**raw, "selfplay": {"side": "keeper"}})
+    with pytest.raises(ValueError, match="selfplay.opponent_runs: expected a list of run directories"):
+        validate_train_config({**raw, "selfplay": {"opponent_runs": "runs/keeper"}})
 
 
 def test_pfsp_picks_the_opponents_it_loses_to_more_often():

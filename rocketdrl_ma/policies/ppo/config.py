@@ -22,6 +22,10 @@ hops. ``curriculum`` (as ML-Agents' lessons, over a minigame's ``difficulty``): 
 each time the last 100 training episodes succeed at least ``threshold`` of the time, raise the
 difficulty by ``step`` up to 1; empty: train at the env config's difficulty throughout.
 ``selfplay``: train one team against an opponent pool (``policies/ppo/selfplay/config.py``); empty: none.
+``imitate`` and ``kickstart``: a scripted teacher for a game without self-play (a minigame's shooter), with the
+meaning and keys of ``selfplay.imitate`` (clone the bot, then DAgger, before the first update) and
+``selfplay.kickstart`` (a fading distillation term towards the bot on the learner's own states); with
+``selfplay`` they go under it.
 ``features``: fixed inputs the model computes from the observation (``features.py``): ``none``, or
 ``car_local`` (ball and other cars in the car's own frame; needs the ``team_relative`` observation).
 ``n_workers``: rollout worker processes, each stepping ``ceil(n_envs / n_workers)`` env copies with its own copy
@@ -42,6 +46,8 @@ from rocketdrl_ma.config import load_config, load_yaml_file, optional_section, r
 from rocketdrl_ma.validation import check_bool, check_choice, check_int, check_number, reject_unknown
 
 from rocketdrl_ma.policies.ppo.selfplay.config import check_selfplay
+from rocketdrl_ma.policies.ppo.selfplay.imitation import check_imitate
+from rocketdrl_ma.policies.ppo.selfplay.kickstart import check_kickstart
 
 from .features import FEATURES
 from .shaping import check_shaping
@@ -76,6 +82,8 @@ TRAIN_DEFAULTS: dict[str, Any] = {
     "features": "none",
     "curriculum": {},
     "selfplay": {},
+    "imitate": {},
+    "kickstart": {},
     "n_workers": None,
     "async": False,
     "watch_every": 0,
@@ -126,6 +134,11 @@ def validate_train_config(raw: dict[str, Any]) -> dict[str, Any]:
     cfg["shaping"] = check_shaping(cfg["shaping"])
     cfg["curriculum"] = _check_curriculum(cfg["curriculum"])
     cfg["selfplay"] = check_selfplay(cfg["selfplay"])
+    cfg["imitate"] = check_imitate(cfg["imitate"], "imitate")
+    cfg["kickstart"] = check_kickstart(cfg["kickstart"], "kickstart")
+    for key in ("imitate", "kickstart"):
+        if cfg[key] and cfg["selfplay"]:
+            raise ValueError(f"{key}: with selfplay, the teacher goes under selfplay.{key}")
     if cfg["selfplay"] and cfg["curriculum"]:
         raise ValueError("selfplay: a curriculum needs a minigame's difficulty; self-play trains on a match")
     # The env config is validated now, so a typo there fails before any training starts.

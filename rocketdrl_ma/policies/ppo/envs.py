@@ -8,7 +8,8 @@ episodes (return, length, success) and the final observation of every row whose 
 ``autoreset`` (the default) a copy that ends is reset at once and its rows carry the next episode's first
 observation, without it the rows keep their final observation until ``reset_copies`` (what a torchrl env's
 partial reset needs, ``rollout.py``). With ``shaping`` weights the pool also returns the potential-based
-shaping term of each row (``shaping.py``).
+shaping term of each row (``shaping.py``); with a ``teacher`` (a scripted bot's name), ``teacher_actions``
+labels every row's current state with the bot's action (kickstarting, ``policies/ppo/selfplay/kickstart.py``).
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from gymnasium import spaces
 
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.env.vector_env import VectorEnv
+from rocketdrl_ma.policies.scripted import make_scripted
 
 from .shaping import make_shaping
 
@@ -58,7 +60,7 @@ class EnvPool:
     """``n_envs`` copies of a PettingZoo env, stepped together as the arenas of one ``VectorEnv``."""
 
     def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None,
-                 shaping: dict[str, float] | None = None, autoreset: bool = True):
+                 shaping: dict[str, float] | None = None, autoreset: bool = True, teacher: str | None = None):
         overrides = {**(overrides or {}), "info_format": "full"}
         self.vec = VectorEnv(config, n_arenas=n_envs, autoreset=False, **overrides)
         self.envs: list[RocketDRLParallelEnv] = self.vec.lanes
@@ -72,6 +74,8 @@ class EnvPool:
         self._lengths = np.zeros(self.n_rows, dtype=np.int64)
         self.shaping = [make_shaping(shaping) for _ in self.envs] if shaping else []
         self.autoreset = autoreset
+        # one teacher per copy: a bot may remember the game it is playing
+        self.teachers = [make_scripted(teacher) for _ in self.envs] if teacher else []
 
     def _rows(self, i: int) -> slice:
         return slice(i * len(self.agents), (i + 1) * len(self.agents))
@@ -130,6 +134,11 @@ class EnvPool:
     def _reset_shaping(self, i: int) -> None:
         if self.shaping:
             self.shaping[i].reset(self.agents, self.envs[i].game_state)
+
+    def teacher_actions(self) -> np.ndarray:
+        """The teacher's action (in the env's action format) for every row in its current state."""
+        return np.asarray([env.action_parser.encode(self.teachers[i].controls(agent, env.game_state))
+                           for i, env in enumerate(self.envs) for agent in self.agents])
 
     def set_difficulty(self, difficulty: float) -> None:
         """A minigame's difficulty knob in [0, 1] (from each copy's next round)."""

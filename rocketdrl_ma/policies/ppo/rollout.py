@@ -13,7 +13,9 @@ Keys besides ``observation``/``action``/``reward``/``done``/``terminated``/``tru
   (whom a copy that has just begun an episode plays) and ``opponent_action`` (the network opponents' actions);
 - written for the policy: in self-play ``opponent_observation``, ``opponent_id`` (whom each row plays),
   ``episode_start``, ``opponent_draw`` (one uniform number per copy, drawn here with the worker's seeded
-  generator, that the policy turns into an opponent), and ``teacher_action`` with a kickstart teacher;
+  generator, that the policy turns into an opponent), and ``teacher_action`` with a kickstart teacher
+  (``selfplay.kickstart``, or a single-team game's top-level ``kickstart``: one scripted teacher per env copy,
+  asked here where the game state is, its labels shipped with the trajectory);
 - written for the learner's bookkeeping (what a trajectory batch must carry back): ``shaping`` (the shaping
   term), ``episode_end``/``episode_return``/``episode_length``/``episode_success`` on the rows whose episode
   ended, and in self-play, on the first row of a copy, ``match_end``/``match_opponent``/``match_generation``/
@@ -54,14 +56,15 @@ class RolloutEnv(EnvBase):
         self.cfg, self.worker = cfg, worker
         first_copy = worker * copies
         self.selfplay = bool(cfg["selfplay"])
-        kickstart = cfg["selfplay"].get("kickstart") if self.selfplay else None
+        # the kickstart teacher: self-play's (its games label the learner's cars), else a single-team game's
+        kickstart = cfg["selfplay"]["kickstart"] if self.selfplay else cfg["kickstart"]
         if self.selfplay:
             from rocketdrl_ma.policies.ppo.selfplay.games import SelfPlayGames
             self.games = SelfPlayGames(cfg, copies, first_copy)
             self.copy_rows = self.games.team_size
         else:
             self.games = EnvPool(cfg["env"], copies, cfg["seed"] + first_copy, cfg["env_overrides"], cfg["shaping"],
-                                 autoreset=False)
+                                 autoreset=False, teacher=kickstart["bot"] if kickstart else None)
             self.copy_rows = len(self.games.agents)
         self.copies, self.rows = copies, self.games.n_rows
         super().__init__(batch_size=torch.Size([self.rows]), device="cpu")

@@ -27,7 +27,7 @@ from tqdm import tqdm
 
 from rocketdrl_ma.config import load_config
 from rocketdrl_ma.physics import CarControls
-from rocketdrl_ma.policies.ppo.selfplay.imitation import imitation_loss
+from rocketdrl_ma.policies.ppo.selfplay.imitation import imitation_loss, warm_start
 from rocketdrl_ma.policies.ppo.selfplay.kickstart import teacher_weight
 from rocketdrl_ma.policies.ppo.selfplay.pool import OpponentPool
 from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
@@ -147,6 +147,8 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     if cfg["selfplay"]:  # the learner is also an opponent; snapshots join the pool
         opponents = OpponentPool(cfg, run_dir, probe.obs_dim)
         opponents.attach(model, agent_steps)
+    elif agent_steps == 0 and cfg["imitate"]:  # a fresh run with a teacher: start from its clone
+        warm_start(model, cfg, log=print, spec=cfg["imitate"])
     policy = RolloutPolicy(model, opponents.slot_models if opponents else None,
                            opponents.n_opponents if opponents else 0)
     rollouts = Rollouts(wcfg, policy, plan, probe.rows_per_copy)
@@ -166,7 +168,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     # A warm-started policy was fitted to inputs scaled by the imitation data's statistics. Fed with PPO's
     # own states they drift (by up to 0.5 in mean and 1.5 in variance over 0.4M self-play steps), and the
     # clone's weights under the drifted statistics lost what PPO's weights under the clone's kept: keep them.
-    frozen_norm = bool(cfg["selfplay"] and cfg["selfplay"]["imitate"])
+    frozen_norm = bool(cfg["imitate"] or (cfg["selfplay"] and cfg["selfplay"]["imitate"]))
     iteration, env_config = 0, wcfg["env"]
     bar = tqdm(total=cfg["max_steps"], initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps, busy_learning = None, agent_steps, 0.0
@@ -178,7 +180,7 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             for group in optimizer.param_groups:
                 group["lr"] = cfg["learning_rate"] * max(frac, 1e-3)
             # ---- kickstarting: a scripted teacher's actions on the learner's states (selfplay/kickstart.py)
-            kick_weight = teacher_weight(cfg["selfplay"].get("kickstart", {}), agent_steps)
+            kick_weight = teacher_weight(cfg["kickstart"] or cfg["selfplay"].get("kickstart", {}), agent_steps)
 
             # ---- what the workers must know, then collect
             sync_controls(policy, difficulty, kick_weight > 0.0, opponents)

@@ -12,6 +12,12 @@
 - ``kickstart``: ``{bot, weight, decay_steps}``: a scripted teacher whose actions on the learner's own
   states add a distillation term to PPO's loss, fading out over ``decay_steps`` (``kickstart.py``);
   empty: none.
+- ``side``: ``alternate`` (the learner swaps teams every episode: one policy for both, as in a match) or
+  ``blue`` / ``orange``: the learner always plays that team, for a game whose teams have different jobs (the
+  penalty duel's shooter and keeper, ``policies/duel.py``).
+- ``opponent_runs``: run directories of *another* learner; the snapshot slots then hold the newest snapshots
+  of those runs (re-read at every snapshot interval) instead of this run's own, which are still written for
+  the other learner to read. Their networks must be shaped like this learner's. Empty: this run's own.
 """
 from __future__ import annotations
 
@@ -26,7 +32,8 @@ from .pfsp import WEIGHTINGS
 
 SELFPLAY_DEFAULTS: dict[str, Any] = {"snapshot_interval": 200_000, "pool_size": 10, "scripted": ["ball_chaser"],
                                      "self_play": 0.2, "weighting": "hard", "p": 2.0, "window": 50,
-                                     "imitate": {}, "kickstart": {}}
+                                     "imitate": {}, "kickstart": {}, "side": "alternate", "opponent_runs": []}
+SIDES = ("alternate", "blue", "orange")
 
 
 def check_selfplay(section: object) -> dict[str, Any]:
@@ -46,6 +53,12 @@ def check_selfplay(section: object) -> dict[str, Any]:
         raise ValueError(f"selfplay.scripted: expected a list of scripted bots from {sorted(SCRIPTED_BOTS)}, "
                          f"got {bots!r}")
     out["scripted"] = list(bots)
+    if out["side"] not in SIDES:
+        raise ValueError(f"selfplay.side: {out['side']!r} is not one of {list(SIDES)}")
+    runs = out["opponent_runs"]
+    if not isinstance(runs, list) or not all(isinstance(run, str) and run for run in runs):
+        raise ValueError(f"selfplay.opponent_runs: expected a list of run directories, got {runs!r}")
+    out["opponent_runs"] = list(runs)
     out["imitate"] = check_imitate(out["imitate"])
     out["kickstart"] = check_kickstart(out["kickstart"])
     return out

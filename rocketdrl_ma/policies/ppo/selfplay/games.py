@@ -1,7 +1,8 @@
 """The self-play games of one rollout worker: the learner drives one team of every env copy, an opponent the other.
 
 The copies are the arenas of one ``VectorEnv``; copy ``i`` is seeded ``seed + i`` and rows are the learner's cars
-only. Each episode a copy swaps the learner's side (copies start on alternate sides) and plays one opponent,
+only. Each episode a copy swaps the learner's side (copies start on alternate sides; with ``selfplay.side`` the
+learner keeps that team, as the penalty duel's shooter or keeper) and plays one opponent,
 named by its index in the learner's opponent table (``pool.py``: 0 the learner itself, then the scripted bots,
 then the snapshot slots). Who that is comes from outside at each episode start (``begin_episodes``), so the
 choice (PFSP) stays with the learner; the games compute the scripted opponents' and the kickstart teacher's
@@ -44,11 +45,12 @@ class SelfPlayGames:
         self.vec = VectorEnv(cfg["env"], n_arenas=n_copies, autoreset=False, **overrides)
         self.envs = self.vec.lanes
         first = self.envs[0]
-        if first.config.get("mode") != "match":
-            self.vec.close()
-            raise ValueError(f"selfplay: needs a match config with two teams, got mode {first.config.get('mode')!r}")
         self.agents = list(self.vec.possible_agents)
         self.team_agents = {t: [a for a in self.agents if a.startswith(t)] for t in TEAMS}
+        if not self.team_agents["blue"] or len(self.team_agents["blue"]) != len(self.team_agents["orange"]):
+            self.vec.close()
+            raise ValueError("selfplay: needs a game with two teams of the same size (a match, the penalty duel), "
+                             f"got mode {first.config.get('mode')!r} with agents {self.agents}")
         self.team_columns = {t: np.array([self.agents.index(a) for a in self.team_agents[t]]) for t in TEAMS}
         self.team_size = len(self.team_agents["blue"])
         self.n_rows = n_copies * self.team_size
@@ -89,7 +91,8 @@ class SelfPlayGames:
 
     def _start_episode(self, i: int) -> None:
         self._episodes[i] += 1
-        self.learner_team[i] = TEAMS[(self.first_copy + i + self._episodes[i]) % 2]
+        side = self.sp["side"]
+        self.learner_team[i] = TEAMS[(self.first_copy + i + self._episodes[i]) % 2] if side == "alternate" else side
         self.opponent[i] = SELF
         if self.shaping:
             self.shaping[i].reset(self.learners(i), self.envs[i].game_state)

@@ -33,42 +33,47 @@ INT_MINIMUMS = {"decisions": 1, "epochs": 1, "dagger_rounds": 0, "dagger_decisio
 DAGGER_EPOCHS = 15  # refit passes over the aggregate after each round (it only grows by a fraction)
 
 
-def check_imitate(section: object) -> dict[str, Any]:
-    """The ``selfplay.imitate`` mapping with defaults; empty: no warm start."""
+def check_imitate(section: object, name: str = "selfplay.imitate") -> dict[str, Any]:
+    """The ``imitate`` mapping (``selfplay.imitate``, or a single-team game's top-level ``imitate``, as
+    ``name`` says) with defaults; empty: no warm start."""
     from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
 
-    out = optional_section("selfplay.imitate", section, IMITATE_KEYS)
+    out = optional_section(name, section, IMITATE_KEYS)
     if not out:
         return out
     for key in ("bot", "opponent"):
         if out[key] not in SCRIPTED_BOTS:
-            raise ValueError(f"selfplay.imitate.{key}: {out[key]!r} is not one of {sorted(SCRIPTED_BOTS)}")
+            raise ValueError(f"{name}.{key}: {out[key]!r} is not one of {sorted(SCRIPTED_BOTS)}")
     for key, least in INT_MINIMUMS.items():
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
-            raise ValueError(f"selfplay.imitate.{key}: expected an int >= {least}, got {value!r}")
+            raise ValueError(f"{name}.{key}: expected an int >= {least}, got {value!r}")
     return out
 
 
 def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: int, seed: int,
-            model: PPOModel | None = None, bot_share: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+            model: PPOModel | None = None, bot_share: float = 1.0,
+            side: str = "alternate") -> tuple[np.ndarray, np.ndarray]:
     """(observations, actions of ``bot``) over ``decisions`` env decisions, the recorded car on alternating
-    sides. Without ``model`` the bot drives and a mirror match (``opponent == bot``) records both cars;
+    sides (``side``: always that team, as a learner with ``selfplay.side`` plays). Without ``model`` the bot drives and a mirror match (``opponent == bot``) records both cars;
     with it (DAgger) ``model`` drives greedily, the bot in its stead with probability ``bot_share`` per
-    decision, and the bot's action is recorded as the label of every state."""
+    decision, and the bot's action is recorded as the label of every state. A game with one team (a
+    minigame's shooter) has no sides: the bot plays, and is recorded for, every car of every episode."""
     env = RocketDRLParallelEnv(config, **overrides)
     player, other = make_scripted(bot), make_scripted(opponent)
     rng = np.random.default_rng(seed)
+    one_team = len({agent.rpartition("_")[0] for agent in env.possible_agents}) == 1
+    sides = ("blue", "orange") if side == "alternate" else (side,)
     obs_rows, act_rows = [], []
     episode = 0
     obs, _ = env.reset(seed=seed)
     try:
         for _ in range(decisions):
             state = env.game_state
-            side = ("blue", "orange")[episode % 2]
+            recorded = sides[episode % len(sides)]
             actions = {}
             for agent in env.agents:
-                mine = agent.startswith(side) or (model is None and opponent == bot)
+                mine = one_team or agent.startswith(recorded) or (model is None and opponent == bot)
                 label = env.action_parser.encode((player if mine else other).controls(agent, state))
                 actions[agent] = label
                 if mine:
@@ -124,12 +129,15 @@ def disagreement(model: PPOModel, obs: np.ndarray, actions: np.ndarray) -> float
     return float(np.mean(greedy != actions))
 
 
-def warm_start(model: PPOModel, cfg: dict[str, Any], log: Callable[[str], None] | None = None) -> dict[str, list]:
-    """Clone ``cfg["selfplay"]["imitate"]`` into ``model`` on the training env config, then run its DAgger
-    rounds. Returns the first fit's epoch losses and, per round, the clone's disagreement with the bot on
-    the states it visited itself (measured before that round's refit)."""
-    spec, seed = cfg["selfplay"]["imitate"], cfg["seed"]
-    obs, actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"], spec["decisions"], seed)
+def warm_start(model: PPOModel, cfg: dict[str, Any], log: Callable[[str], None] | None = None,
+               spec: dict[str, Any] | None = None) -> dict[str, list]:
+    """Clone ``spec`` (default ``cfg["selfplay"]["imitate"]``) into ``model`` on the training env config, then
+    run its DAgger rounds. Returns the first fit's epoch losses and, per round, the clone's disagreement with
+    the bot on the states it visited itself (measured before that round's refit)."""
+    spec, seed = spec if spec is not None else cfg["selfplay"]["imitate"], cfg["seed"]
+    side = cfg["selfplay"]["side"] if cfg["selfplay"] else "alternate"
+    obs, actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"], spec["decisions"], seed,
+                           side=side)
     losses = clone(model, obs, actions, spec["epochs"], seed=seed)
     if log:
         log(f"imitation: cloned {spec['bot']} on {len(obs):,} samples, loss {losses[0]:.3f} -> {losses[-1]:.3f}")
@@ -137,7 +145,7 @@ def warm_start(model: PPOModel, cfg: dict[str, Any], log: Callable[[str], None] 
     for k in range(spec["dagger_rounds"]):
         bot_share = 0.5 ** (k + 1)
         new_obs, new_actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"],
-                                       spec["dagger_decisions"], seed + 1 + k, model, bot_share)
+                                       spec["dagger_decisions"], seed + 1 + k, model, bot_share, side)
         rounds.append(disagreement(model, new_obs, new_actions))
         obs, actions = np.concatenate([obs, new_obs]), np.concatenate([actions, new_actions])
         clone(model, obs, actions, DAGGER_EPOCHS, seed=seed + 1 + k, fit_normaliser=False)

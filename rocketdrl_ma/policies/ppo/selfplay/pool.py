@@ -6,7 +6,9 @@ Opponents are numbered once for a run: 0 is the learner itself, ``1..S`` the scr
 learner's); when a new snapshot replaces the oldest one its slot's generation goes up, so results of
 episodes begun against the old occupant are not booked to the new one. The opponent of each new episode is
 drawn from ``probabilities()``: the learner itself with probability ``self_play``, else prioritised
-fictitious self-play (``pfsp.py``) over the scripted bots and the snapshots present.
+fictitious self-play (``pfsp.py``) over the scripted bots and the snapshots present. With ``opponent_runs`` (the
+penalty duel's other learner, ``policies/duel.py``) the slots hold the newest snapshots of those runs instead, re-read at
+every snapshot interval; the learner's own snapshots are still written, for the other learner.
 """
 from __future__ import annotations
 
@@ -30,6 +32,7 @@ class OpponentPool:
         self.cfg, self.sp = cfg, cfg["selfplay"]
         self.obs_dim = obs_dim
         self.snapshot_dir = Path(run_dir) / "snapshots"
+        self.opponent_runs = [Path(run) for run in self.sp["opponent_runs"]]
         self.pfsp = PFSP(self.sp["weighting"], self.sp["p"], self.sp["window"])
         self.scripted = [f"scripted:{bot}" for bot in self.sp["scripted"]]
         for name in self.scripted:
@@ -68,32 +71,52 @@ class OpponentPool:
             self.imitation = warm_start(model, self.cfg, log=print)
         interval = self.sp["snapshot_interval"]
         self.next_snapshot = (agent_steps // interval + 1) * interval
-        for path in self.snapshots()[-self.n_slots:]:
-            self._load_into_slot(path)
+        self._fill_slots()
 
     def snapshots(self) -> list[Path]:
         """Snapshot files of this run, oldest first."""
-        return sorted(self.snapshot_dir.glob("step_*[0-9].pt"), key=lambda p: int(p.stem.split("_")[1]))
+        return _snapshot_files(self.snapshot_dir)
+
+    def opponent_snapshots(self) -> list[Path]:
+        """What the slots choose from, oldest first: this run's snapshots, or those of ``opponent_runs``."""
+        if not self.opponent_runs:
+            return self.snapshots()
+        found = [p for run in self.opponent_runs for p in _snapshot_files(run / "snapshots")]
+        return sorted(found, key=lambda p: (_step(p), str(p)))
+
+    def _fill_slots(self) -> None:
+        for path in self.opponent_snapshots()[-self.n_slots:]:
+            self._load_into_slot(path)
 
     def snapshot(self, model: PPOModel, agent_steps: int) -> Path:
         """Save the learner as a playable checkpoint and put a frozen copy into the oldest slot."""
         meta = checkpoint_meta(self.cfg, model, self.obs_dim, agent_steps, {"snapshot": True})
         path = save_checkpoint(self.snapshot_dir / f"step_{agent_steps}.pt", model, meta)
-        self._load_into_slot(path)
+        if self.opponent_runs:  # the other learner's newest snapshots, which may have come since the last look
+            self._fill_slots()
+        else:
+            self._load_into_slot(path)
         return path
 
     def _load_into_slot(self, path: Path) -> None:
-        name = f"snapshot:{path.stem.split('_')[1]}"
+        # another run's snapshot is named after its run: "keeper/snapshot:250000"
+        run = f"{path.parent.parent.name}/" if self.opponent_runs else ""
+        name = f"{run}snapshot:{_step(path)}"
         if name in self.slot_names:
             return
-        present = [(int(n.split(":")[1]), k) for k, n in enumerate(self.slot_names) if n is not None]
+        present = [(int(n.rpartition(":")[2]), k) for k, n in enumerate(self.slot_names) if n is not None]
         empty = [k for k, n in enumerate(self.slot_names) if n is None]
         slot = empty[0] if empty else min(present)[1]
+        model, _ = load_model(path)
+        try:
+            self.slot_models[slot].load_state_dict(model.state_dict())
+        except RuntimeError as error:  # another run's network: a different observation, action or size
+            raise ValueError(f"selfplay.opponent_runs: {path} is not shaped like this learner's network "
+                             f"(observation, action, hidden_units, num_layers and features must match): {error}"
+                             ) from error
         old = self.slot_names[slot]
         if old is not None:
             self.pfsp.remove_opponent(old)
-        model, _ = load_model(path)
-        self.slot_models[slot].load_state_dict(model.state_dict())
         self.slot_names[slot] = name
         self.slot_generation[slot] += 1
         self.pfsp.add_opponent(name)
@@ -138,3 +161,11 @@ class OpponentPool:
 
     def state_tensors(self) -> tuple[torch.Tensor, torch.Tensor]:
         return torch.as_tensor(self.probabilities(), dtype=torch.float32), torch.as_tensor(self.generations())
+
+
+def _step(snapshot: Path) -> int:
+    return int(snapshot.stem.split("_")[1])
+
+
+def _snapshot_files(folder: Path) -> list[Path]:
+    return sorted(folder.glob("step_*[0-9].pt"), key=_step)
