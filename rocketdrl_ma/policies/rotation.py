@@ -5,8 +5,12 @@ Every car of a team works the roles out from the same state, so they agree witho
 
 - **first man**: the car that reaches the ball soonest from its own side of it (a car upfield of the ball has to
   come back around it first, and pays for that); the last toucher keeps the role while it is near the ball, so two
-  cars at about the same distance do not swap it every decision. Only the first man goes for the ball: the others
-  never drive at it, which is what keeps a team from double commits.
+  cars at about the same distance do not swap it every decision.
+- **follow-up**: one more car goes for the ball: of the others, the one that would reach it soonest, when it is
+  goal-side of the ball (it comes at the ball from behind, facing the opponents' goal) and, with three or more
+  cars, not the last man. It arrives just after the first man and takes the 50-50 or the loose ball he leaves:
+  one car on the ball against two chasers loses most challenges, two staggered cars win them. A car upfield of
+  the ball never follows up; it rotates back instead.
 - **last man**: of the others, the one nearest its own goal; it stands on the line from its goal's centre to the
   ball, in the net when the ball is in its third, further out while the ball is away.
 - **second man** (3v3 and 4v4: everyone between): behind the ball towards the middle, ready for the follow-up.
@@ -32,6 +36,7 @@ WRONG_SIDE_COST_S = 0.6
 #: the last toucher keeps the first man's role while within this of the ball, at this head start
 KEEP_ROLE_WITHIN_UU, KEEP_ROLE_BONUS_S = 900.0, 0.35
 KICKOFF_TAKERS = 2  # cars that go for the ball at a kickoff
+FOLLOW_UP_GOAL_SIDE_UU = 300.0  # the follow-up car is at least this much nearer its own goal than the ball
 #: the second man's spot: this far behind the ball, its x pulled this much towards the middle
 SUPPORT_BACK_UU, SUPPORT_X_SHARE = 1900.0, 0.5
 #: the last man stays this far behind the ball on its way to goal: with one team-mate (2v2), with more
@@ -109,6 +114,17 @@ def assign_roles(view: TeamView, last_touch: str | None) -> dict[str, Role]:
     for k, a in enumerate(others):
         roles[a] = Role.LAST if k == 0 else Role.SECOND
     return roles
+
+
+def follow_up(view: TeamView, roles: dict[str, Role]) -> str | None:
+    """The car that goes for the ball after the first man (None: no car does): of the cars not first, the one that
+    would reach the ball soonest, if it is goal-side of the ball by ``FOLLOW_UP_GOAL_SIDE_UU`` and, in a team of
+    three or more, not the last man (he keeps covering the goal). Every team-mate reaches the same answer."""
+    candidates = [a for a, r in roles.items() if r is not Role.FIRST and (len(roles) <= 2 or r is not Role.LAST)]
+    if not candidates or is_kickoff(view):
+        return None
+    car = min(candidates, key=lambda a: (arrival_s(view.pos[a], view.vel[a], view.ball_pos), a))
+    return car if view.pos[car][1] < view.ball_pos[1] - FOLLOW_UP_GOAL_SIDE_UU else None
 
 
 def ball_ahead(view: TeamView, seconds: float = 0.8) -> np.ndarray:

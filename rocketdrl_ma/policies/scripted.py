@@ -178,15 +178,22 @@ class FlipChaser(ScriptedBot):
 
 class Rotator(ScriptedBot):
     """A team player that rotates (``rotation.py``): the first man plays the flip-chaser's game on the ball, the
-    second supports behind it, the last covers the goal; roles are worked out afresh from positions every
-    decision, identically by every team-mate, so only one car goes for the ball. Cars coming back take boost on
-    the way. Alone on its team (1v1, or team-mates demoed) it is the flip-chaser. Stateless, lookup-table rows
-    only (a lookup clone can copy it), one instance plays any number of cars.
+    follow-up car (goal-side of the ball, the next to reach it) comes in behind him for the 50-50 and the loose
+    ball, the others support behind the ball and cover the goal; roles are worked out afresh from positions every
+    decision, identically by every team-mate, so at most two cars go for the ball. A car on the ball dodges into
+    a ground ball it is lined up to shoot (the flip-chaser dodges only at kickoffs): the harder hit wins the
+    challenge. Cars coming back take boost on the way. Alone on its team (1v1, or team-mates demoed) it is the
+    flip-chaser with that dodge. Stateless, lookup-table rows only (a lookup clone can copy it), one instance
+    plays any number of cars.
     """
 
     bot_name = "rotator"
     ARRIVE_UU = 250.0       # within this of its spot a car stops and turns to face the ball
     BALL_CLEARANCE_UU = 450.0  # a car off the ball keeps its path this far from the ball
+    #: the shot dodge: jump when the ball's surface is this many seconds away at the closing speed, which must be
+    #: at least this; the ball on the ground, straight ahead, and the car behind it towards the opponents' goal
+    DODGE_LEAD_S, DODGE_MIN_CLOSING_UU_S = 0.22, 500.0
+    DODGE_MAX_BALL_Z_UU, DODGE_AIM_RAD, DODGE_MIN_SHOT_COS = 160.0, 0.35, 0.5
 
     def __init__(self) -> None:
         self.chaser = FlipChaser()
@@ -198,8 +205,9 @@ class Rotator(ScriptedBot):
         view = rotation.team_view(agent, state)
         roles = rotation.assign_roles(view, state.last_touch)
         role = roles.get(agent, Role.FIRST)
-        if role is Role.FIRST:
-            return self.chaser.controls(agent, state)
+        if role is Role.FIRST or rotation.follow_up(view, roles) == agent:
+            dodge = self._finish_dodge(agent, state, view) or self._shot_dodge(agent, state, view)
+            return dodge or self.chaser.controls(agent, state)
         pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         ball = rotation.ball_ahead(view)
         if role is Role.LAST:
@@ -218,6 +226,37 @@ class Rotator(ScriptedBot):
             angle, _ = _angle_distance(pos, rot, view.ball_pos)
             return _ground_row(0.0, self.chaser._steer(angle))
         return self.chaser._drive(pos, rot, _out_of_goal_mouth(pos, target), speed)
+
+    def _shot_dodge(self, agent: str, state: GameState, view: rotation.TeamView) -> CarControls | None:
+        """The jump that starts a dodge into the ball (None: no dodge now); outside kickoffs, which the flip-chaser
+        plays with its own dodge."""
+        car = state.cars[agent]
+        if rotation.is_kickoff(view) or not car.on_ground or view.ball_pos[2] > self.DODGE_MAX_BALL_Z_UU:
+            return None
+        pos, rot, vel = view.pos[agent], _team_rot(agent, car.rot_mat), view.vel[agent]
+        if rot[2, 2] < 0.9:  # on a wall or a ramp: a dodge from there does not go at the ball
+            return None
+        to_ball = (view.ball_pos - pos)[:2]
+        distance = float(np.hypot(*to_ball))
+        closing = float((vel[:2] - view.ball_vel[:2]) @ to_ball) / max(distance, 1.0)
+        to_goal = ATTACK_GOAL[:2] - view.ball_pos[:2]
+        shot_cos = float(to_ball @ to_goal) / max(distance * float(np.hypot(*to_goal)), 1.0)
+        angle, _ = _angle_distance(pos, rot, view.ball_pos)
+        if (closing > self.DODGE_MIN_CLOSING_UU_S and abs(angle) < self.DODGE_AIM_RAD and shot_cos > self.DODGE_MIN_SHOT_COS
+                and (distance - FlipChaser.CONTACT_UU) / closing < self.DODGE_LEAD_S):
+            return _air_row(jump=True, boost=car.boost > 0.0)
+        return None
+
+    @staticmethod
+    def _finish_dodge(agent: str, state: GameState, view: rotation.TeamView) -> CarControls | None:
+        """A car on the ball low in the air after a jump of its own, upright and not yet dodged, dodges forward
+        (release the jump, then press it with pitch): the second half of the shot dodge, sequenced from the car's
+        jump state."""
+        car = state.cars[agent]
+        if (rotation.is_kickoff(view) or car.on_ground or not car.has_jumped or car.has_flipped
+                or _team_rot(agent, car.rot_mat)[2, 2] <= 0.7 or car.pos[2] >= 300.0):
+            return None
+        return _ground_row(1.0, 0.0) if car.is_jumping else _air_row(pitch=-1.0, jump=True)
 
 
 class Idle(ScriptedBot):
