@@ -1,0 +1,21 @@
+"""The shipped minigame checkpoints still play their game: a few greedy episodes on seeds no training run used, at
+difficulty 1, through the same evaluation as the README's results table (``rocketdrl-ma eval``)."""
+from pathlib import Path
+
+import pytest
+
+from rocketdrl_ma.policies.ppo.checkpoint import load_model
+from rocketdrl_ma.policies.ppo.evaluate import evaluate
+
+CHECKPOINTS = Path(__file__).resolve().parents[2] / "policies" / "checkpoints"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["penalty_tuned", "barrier_tuned", "aerial_tuned"])
+def test_a_shipped_minigame_checkpoint_scores(name):
+    path = CHECKPOINTS / f"{name}.pt"
+    _, meta = load_model(path)
+    assert meta["env"]["resolved"]["difficulty"] == 1.0  # evaluation plays the full task
+    result = evaluate(path, episodes=6, seed=90_210, n_envs=2)
+    assert result.episodes == 6
+    assert result.success_rate > 0.0, f"{name}: no goal in 6 greedy episodes"
