@@ -85,18 +85,21 @@ class Miss(GameEvent):
 
 
 @dataclass(frozen=True)
-class Demo(GameEvent):
-    """``agent`` demolished ``victim``."""
+class CarHit(GameEvent):
+    """``agent``'s car hit ``victim``'s (the physics' ``CarHit``): a ``Demo`` or a ``Bump``."""
     agent: str
     victim: str
+
+
+@dataclass(frozen=True)
+class Demo(CarHit):
+    """``agent`` demolished ``victim``."""
     kind: ClassVar[GameEventKind] = GameEventKind.DEMO
 
 
 @dataclass(frozen=True)
-class Bump(GameEvent):
+class Bump(CarHit):
     """``agent`` bumped ``victim``."""
-    agent: str
-    victim: str
     kind: ClassVar[GameEventKind] = GameEventKind.BUMP
 
 
@@ -127,7 +130,7 @@ def describe_event(event: GameEvent, tick_rate: int = 120) -> str:
     t = f"{event.tick / tick_rate:7.1f} s"
     if isinstance(event, Goal):
         return f"{t}  GOAL {event.team} ({event.scorer or 'nobody'}{', own goal' if event.own_goal else ''})"
-    if isinstance(event, (Demo, Bump)):
+    if isinstance(event, CarHit):
         return f"{t}  {event.kind.value}: {event.agent} hit {event.victim}"
     if isinstance(event, Miss):
         return f"{t}  miss ({event.reason})"
