@@ -655,6 +655,42 @@ def _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
 
 
 @njit(cache=True)
+def _gyroscopic_step(w, R, inertia, h, out):
+    """The angular-velocity change Bullet's implicit gyroscopic term gives a body turning at ``w`` over ``h``
+    (``btRigidBody::computeGyroscopicImpulseImplicit_Body``: one Newton step of Euler's equations in body axes)."""
+    wb = mat_t_vec(R, w)
+    iw = inertia * wb
+    f = vcross(wb, iw) * h
+    # Columns of the Jacobian J = I + (skew(wb) I - skew(I wb)) h, then J^-1 f by Cramer's rule (Bullet's solve33).
+    c0 = np.array([inertia[0], (wb[2] * inertia[0] - iw[2]) * h, (-wb[1] * inertia[0] + iw[1]) * h])
+    c1 = np.array([(-wb[2] * inertia[1] + iw[2]) * h, inertia[1], (wb[0] * inertia[1] - iw[0]) * h])
+    c2 = np.array([(wb[1] * inertia[2] - iw[1]) * h, (-wb[0] * inertia[2] + iw[0]) * h, inertia[2]])
+    inv_det = 1.0 / vdot(c0, vcross(c1, c2))
+    wb[0] -= inv_det * vdot(f, vcross(c1, c2))
+    wb[1] -= inv_det * vdot(c0, vcross(f, c2))
+    wb[2] -= inv_det * vdot(c0, vcross(c1, f))
+    out[:] = mat_vec(R, wb) - w
+
+
+@njit(cache=True)
+def cancel_gyroscopic(ang_vel, rot, inv_inertia, writable, dt, out):
+    """The angular velocities to hand PyBullet so that, after the gyroscopic step it adds to every rigid body
+    (and cannot be switched off from Python), each car turns at ``ang_vel``: RocketSim's cars have no gyroscopic
+    term (``m_rigidbodyFlags = 0``). Solves w + gyro(w) = target by fixed-point iteration (the map contracts by
+    about dt |w| on a car's inertia ratios, below 0.1 at the 5.5 rad/s cap)."""
+    step = np.empty(3)
+    for i in range(ang_vel.shape[0]):
+        out[i] = ang_vel[i]
+        if not writable[i]:
+            continue
+        inertia = 1.0 / inv_inertia[i]
+        for _ in range(8):
+            _gyroscopic_step(out[i], rot[i], inertia, dt, step)
+            for j in range(3):
+                out[i, j] = ang_vel[i, j] - step[j]
+
+
+@njit(cache=True)
 def car_post_tick(vel, ang_vel, active, cs, dt):
     """Speed caps, the supersonic state and demolition timers, after the rigid-body step.
 
