@@ -54,6 +54,72 @@ def _grounded(speed: float) -> dict:
     return dict(pos=(0.0, -2000.0, CAR_REST_Z), vel=(0.0, speed, 0.0), yaw=YAW_PLUS_Y)
 
 
+# ------------------------------------------------------------------------------------------------- jumps
+@pytest.mark.parametrize("speed", [0.0, 1100.0])
+@pytest.mark.parametrize("hold", [1, 2, 3, 4, 6, 12, 23, 24, 25, 40])
+def test_jump_timers_follow_rocketsim(rocketsim_oracle, speed, hold):
+    """A jump held ``hold`` ticks, a double jump 10 ticks after release, the landing and the next jump: jump_time
+    counts from the press until the landing (not only while the jump force acts), has_jumped and the timers clear on
+    landing, on the same ticks as RocketSim."""
+    def script(t):
+        k = t - 10
+        return dict(throttle=1.0, jump=(0 <= k < hold) or k == hold + 10 or (330 <= k < 330 + hold))
+    theirs, ours = _both(rocketsim_oracle, _grounded(speed), script, 10 + 330 + hold + 60)
+    _assert_mechanics_equal(theirs, ours, f"hold={hold}")
+    airborne = next(t for t in range(len(theirs)) if not theirs[t][1]["on_ground"])
+    landing = next(t for t in range(airborne, len(theirs)) if theirs[t][1]["on_ground"])
+    gaps = [np.linalg.norm(a["pos"] - b["pos"]) for (a, _), (b, _) in zip(theirs, ours)]
+    assert max(gaps[:landing]) < 0.25
+    assert max(gaps) < 4.0  # landing from up to 460 uu dips RocketSim's car up to 3.2 uu lower (README, Fidelity)
+
+
+# ------------------------------------------------------------------------------------------------- flips
+DODGES = {  # pitch, yaw, roll
+    "front": (-1.0, 0.0, 0.0), "back": (1.0, 0.0, 0.0), "side": (0.0, 1.0, 0.0), "roll": (0.0, 0.0, -1.0),
+    "diagonal": (-1.0, 1.0, 0.0), "diagonal_back": (1.0, -1.0, 0.0), "diagonal_roll": (-0.7, 0.0, 0.7),
+    "small_sum": (-0.3, 0.25, 0.0),  # |pitch| + |yaw| + |roll| = 0.55 >= 0.5 flips (each axis alone is below)
+    "below_deadzone": (-0.2, 0.0, 0.2),  # 0.4: a double jump
+    "stall": (0.05, -0.05, 0.05),  # flips with no impulse and no torque
+}
+
+
+@pytest.mark.parametrize("speed", [0.0, 900.0, 1700.0])
+@pytest.mark.parametrize("delay", [1, 9, 40])
+@pytest.mark.parametrize("dodge", sorted(DODGES))
+def test_flips_follow_rocketsim(rocketsim_oracle, dodge, delay, speed):
+    """A full jump, then a dodge ``delay`` ticks after it, held through the flip and the landing: is_flipping
+    lasts as long (the torque acts until the flip's time reaches 0.65 s at the start of a tick), flip_time counts
+    on after the flip and is cleared on landing, and the car turns as RocketSim's does (a diagonal dodge included)."""
+    pitch, yaw, roll = DODGES[dodge]
+
+    def script(t):
+        k = t - 10
+        stick = k >= 24 + delay
+        return dict(throttle=1.0, jump=(0 <= k < 24) or k == 24 + delay,
+                    pitch=pitch if stick else 0.0, yaw=yaw if stick else 0.0, roll=roll if stick else 0.0)
+    theirs, ours = _both(rocketsim_oracle, _grounded(speed), script, 10 + 24 + delay + 100)
+    _assert_mechanics_equal(theirs, ours, dodge)
+    for t, ((a, _), (b, _)) in enumerate(zip(theirs, ours)):
+        assert _angle_deg(a["rot_mat"], b["rot_mat"]) < 0.1, (t, "orientation")
+        assert np.abs(a["ang_vel"] - b["ang_vel"]).max() < 2e-3, (t, "ang_vel")
+        assert np.linalg.norm(a["vel"] - b["vel"]) < 0.5, (t, "vel")
+
+
+@pytest.mark.parametrize("cancel_pitch", [1.0, 0.6, 0.3])
+@pytest.mark.parametrize("cancel_at", [3, 12, 30])
+def test_flip_cancel_scales_the_flips_pitch(rocketsim_oracle, cancel_pitch, cancel_at):
+    """Pulling back during a front flip scales its pitch torque by 1 - |pitch| (a full pull stops it)."""
+    def script(t):
+        k = t - 10
+        dodge = 24 + 6
+        pitch = -1.0 if dodge <= k < dodge + cancel_at else (cancel_pitch if k >= dodge + cancel_at else 0.0)
+        return dict(jump=(0 <= k < 24) or k == dodge, pitch=pitch, yaw=0.3 if k >= dodge else 0.0)
+    theirs, ours = _both(rocketsim_oracle, _grounded(500.0), script, 10 + 30 + 90)
+    _assert_mechanics_equal(theirs, ours, "cancel")
+    for t, ((a, _), (b, _)) in enumerate(zip(theirs, ours)):
+        assert np.abs(a["ang_vel"] - b["ang_vel"]).max() < 2e-3, (t, "ang_vel")
+
+
 # ------------------------------------------------------------------------------------------------- air control
 AIR_INPUTS = [(0.6, 0.0, 0.3), (1.0, 0.0, 0.5), (-0.6, 0.0, -0.3), (0.3, 0.0, 1.0), (0.0, 1.0, 0.0),
               (0.5, -0.5, 0.5), (0.0, 0.0, 0.0)]
@@ -74,3 +140,33 @@ def test_air_control_follows_rocketsim(rocketsim_oracle, inputs, ang_vel, boost)
         assert np.abs(a["ang_vel"] - b["ang_vel"]).max() < 1e-3, (t, "ang_vel")
         assert _angle_deg(a["rot_mat"], b["rot_mat"]) < 0.05, (t, "orientation")
     assert np.linalg.norm(theirs[-1][0]["pos"] - ours[-1][0]["pos"]) < 0.5
+
+
+# ------------------------------------------------------------------------------------------------- supersonic
+@pytest.mark.parametrize("start_speed", [0.0, 700.0, 1500.0, 2050.0, 2180.0, 2250.0])
+def test_supersonic_follows_rocketsim(rocketsim_oracle, start_speed):
+    """Boosting up to and past 2200 uu/s, then coasting down through 2100: is_supersonic starts and ends on the
+    same ticks, supersonic_time counts from one tick on its first tick, as RocketSim's."""
+    def script(t):
+        return dict(throttle=1.0 if t < 200 else 0.0, boost=t < 200)
+    theirs, ours = _both(rocketsim_oracle, dict(_grounded(start_speed), pos=(0.0, -4000.0, CAR_REST_Z), boost=100.0),
+                         script, 300)
+    _assert_mechanics_equal(theirs, ours, "supersonic")
+    assert any(m["is_supersonic"] for _, m in theirs) and not theirs[-1][1]["is_supersonic"]
+
+
+# ------------------------------------------------------------------------------------------------- auto-flip
+@pytest.mark.parametrize("roll", [3.1, -3.0, 2.9, -2.85])
+def test_auto_flip_follows_rocketsim(rocketsim_oracle, roll):
+    """Jump on the first tick a car lies on its roof: the same push off the roof (the change of velocity on the
+    press tick) and the same roll back towards the wheels, either way. (Pressed later, the states already differ:
+    RocketSim's car resting on its roof jitters, 4-10 uu/s downwards and +-0.3 rad/s, ours lies still.)"""
+    c, s = math.cos(roll), math.sin(roll)
+    rot = np.column_stack(([1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]))
+    theirs, ours = _both(rocketsim_oracle, dict(pos=(0.0, -2000.0, 40.5), rot_mat=rot), lambda t: dict(jump=t == 1),
+                         60)
+    push_rs, push_us = (trace[1][0]["vel"] - trace[0][0]["vel"] for trace in (theirs, ours))
+    assert push_rs[2] > 180.0
+    np.testing.assert_allclose(push_us, push_rs, atol=2.0)
+    for t in range(1, 60):
+        assert np.abs(theirs[t][0]["ang_vel"] - ours[t][0]["ang_vel"]).max() < 0.03, t
