@@ -142,6 +142,28 @@ def test_air_control_follows_rocketsim(rocketsim_oracle, inputs, ang_vel, boost)
     assert np.linalg.norm(theirs[-1][0]["pos"] - ours[-1][0]["pos"]) < 0.5
 
 
+@pytest.mark.parametrize("yaw", [-math.pi / 2, 0.0, math.pi, 0.7])
+def test_mechanics_do_not_depend_on_heading(rocketsim_oracle, yaw):
+    """The scripts above face +y (blue's attack); the same aerial and a diagonal dodge facing orange's way and
+    two other headings: the car model has no preferred direction, in ours as in RocketSim's."""
+    from rocketsim_oracle import yaw_rot_mat
+    rot = yaw_rot_mat(yaw)
+    forward = rot[:, 0]
+    air_start = dict(pos=(0.0, 0.0, 1000.0), vel=tuple(300.0 * forward + (0.0, 0.0, 200.0)), rot_mat=rot, boost=100.0)
+    theirs, ours = _both(rocketsim_oracle, air_start,
+                         lambda t: dict(pitch=0.6, roll=0.3, yaw=-0.2, boost=True, throttle=1.0), 120)
+    for t, ((a, _), (b, _)) in enumerate(zip(theirs, ours)):
+        assert np.abs(a["ang_vel"] - b["ang_vel"]).max() < 1e-3, (t, "air ang_vel")
+    assert np.linalg.norm(theirs[-1][0]["pos"] - ours[-1][0]["pos"]) < 0.5
+    ground_start = dict(pos=(0.0, 0.0, CAR_REST_Z), vel=tuple(1000.0 * forward), rot_mat=rot)
+    theirs, ours = _both(rocketsim_oracle, ground_start,
+                         lambda t: dict(throttle=1.0, jump=t < 10 or t == 20, pitch=-1.0 if t >= 20 else 0.0,
+                                        yaw=0.6 if t >= 20 else 0.0), 110)
+    _assert_mechanics_equal(theirs, ours, f"dodge at yaw {yaw}")
+    for t, ((a, _), (b, _)) in enumerate(zip(theirs, ours)):
+        assert np.linalg.norm(a["vel"] - b["vel"]) < 0.5, (t, "dodge vel")
+
+
 # ------------------------------------------------------------------------------------------------- supersonic
 @pytest.mark.parametrize("start_speed", [0.0, 700.0, 1500.0, 2050.0, 2180.0, 2250.0])
 def test_supersonic_follows_rocketsim(rocketsim_oracle, start_speed):
