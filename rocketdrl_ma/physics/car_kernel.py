@@ -77,6 +77,31 @@ _AIR_DAMPING = np.array(C.CAR_AIR_CONTROL_DAMPING) * C.CAR_TORQUE_SCALE
 _GRAVITY = -C.GRAVITY_Z
 
 
+def _f32(x: float) -> float:
+    return float(np.float32(x))
+
+
+# RocketSim keeps its car timers in float32, as sums of float32(dt), and compares them with float32 limits: a limit
+# that is a whole number of ticks then falls on the side float32 rounding puts it (after 78 ticks a flip's time is
+# 0.64999974 < 0.65, so the flip torque acts for a 79th tick; 24 ticks of jump make 0.20000006 >= 0.2). The timers
+# below follow that arithmetic (``_tick``) and these limits.
+_JUMP_MIN_TIME = _f32(C.JUMP_MIN_TIME)
+_JUMP_MAX_TIME = _f32(C.JUMP_MAX_TIME)
+_JUMP_RESET_TIME = _f32(np.float32(C.JUMP_MIN_TIME) + np.float32(C.JUMP_RESET_MIN_TIME))
+_DOUBLEJUMP_MAX_DELAY = _f32(C.DOUBLEJUMP_MAX_DELAY)
+_FLIP_TORQUE_TIME = _f32(C.FLIP_TORQUE_TIME)
+_FLIP_PITCHLOCK_TIME = _f32(np.float32(C.FLIP_TORQUE_TIME) + np.float32(C.FLIP_PITCHLOCK_EXTRA_TIME))
+_FLIP_Z_DAMP_START = _f32(C.FLIP_Z_DAMP_START)
+_FLIP_Z_DAMP_END = _f32(C.FLIP_Z_DAMP_END)
+_SUPERSONIC_MAINTAIN_MAX_TIME = _f32(C.SUPERSONIC_MAINTAIN_MAX_TIME)
+
+
+@njit(cache=True, inline="always")
+def _tick(timer, dt):
+    """``timer + dt`` as RocketSim's float32 timers add it (both operands rounded to float32 first)."""
+    return float(np.float32(np.float32(timer) + np.float32(dt)))
+
+
 @njit(cache=True)
 def interp(curve, x):
     """Piecewise-linear curve lookup, clamped at both ends (RocketSim's LinearPieceCurve)."""
@@ -184,6 +209,7 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
                            np.zeros((4, 3)))
     susp_impulse, fric_impulse, fric_rel = np.zeros((4, 3)), np.zeros((4, 3)), np.zeros((4, 3))
     v0, w0, v, w = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    force_dv = np.empty(3)  # the part of this tick's velocity change so far that RocketSim applies as forces
     scratch = Scratch(np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3))
     n_unwritable = 0
     for i in range(pos.shape[0]):
@@ -201,6 +227,7 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         w0[:] = ang_vel[i]
         v[:] = v0
         w[:] = w0
+        force_dv[:] = 0.0
         car, c, m = cs[i], controls[i], mut[car_arena[i]]  # this car's state row, controls, arena's mutators
         jump = c[5] > 0.5
         jump_pressed = jump and car[CS_LAST_JUMP] < 0.5
@@ -213,12 +240,14 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         _friction_impulses(p, R, frame, v0, w0, inv_inertia[i], wheel_is_front[i], wheels, car, fric_impulse,
                            fric_rel, scratch, dt)
         v_fwd = _update_wheels(frame, v0, w0, p, c, wheel_is_front[i], three_wheel[i], num_contact, num_world,
-                               wheels, car, v, scratch, dt)
-        if num_contact == 0:
-            _update_air_torque(R, frame, c, car, v, w, dt)
-        _update_jump(on_ground, jump, jump_pressed, up, m, car, v, dt)
+                               wheels, car, v, force_dv, scratch, dt)
+        if not on_ground:
+            _update_air_torque(R, frame, c, num_contact == 0, car, v, w, force_dv, dt)
+        else:
+            car[CS_IS_FLIPPING] = 0.0
+        _update_jump(on_ground, jump, jump_pressed, up, m, car, v, force_dv, dt)
         _update_auto_flip(jump_pressed, frame, car, v, w, dt)
-        _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, car, v, dt)
+        _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, car, v, force_dv, dt)
         if c[0] != 0.0 and ((0 < num_contact < 4) or car[CS_BODY_CONTACT] > 0.5):
             _update_auto_roll(frame, num_contact, wheels, car, v, w, dt)
         car[CS_BODY_CONTACT] = 0.0
@@ -375,7 +404,8 @@ def _wheel_axle(is_front, fwd, right, cos_a, sin_a, out):
 
 
 @njit(cache=True, inline="always")
-def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_world, wheels, car, v, scratch, dt):
+def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_world, wheels, car, v, force_dv,
+                   scratch, dt):
     """RocketSim's ``_UpdateWheels``: this tick's handbrake, engine and brake, steering angle and tyre friction
     factors (applied next tick), and the sticky force. Returns the forward speed at the start of the tick."""
     fwd, right, _, _ = frame
@@ -443,6 +473,7 @@ def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_
         if real_throttle != 0.0 or abs_v_fwd > C.STOPPING_FORWARD_VEL:
             sticky += C.STICKY_FORCE_FULL_STICK_EXTRA * (1.0 - abs(n_avg[2]))
         v -= n_avg * (sticky * _GRAVITY * dt)
+        force_dv -= n_avg * (sticky * _GRAVITY * dt)
     return v_fwd
 
 
@@ -459,46 +490,54 @@ def _mean_normal(wheels):
 
 
 @njit(cache=True, inline="always")
-def _update_air_torque(R, frame, c, car, v, w, dt):
-    """RocketSim's ``_UpdateAirTorque`` with no wheel down: the flip's torque (and its cancel) or air control
-    (pitch, yaw, roll with damping; pitch locked after a flip), and air throttle."""
+def _update_air_torque(R, frame, c, air_control_allowed, car, v, w, force_dv, dt):
+    """RocketSim's ``_UpdateAirTorque``, with fewer than 3 wheels down: a flip's torque while it lasts (a flip ends
+    once its time reaches 0.65 s at the start of a tick; pulling against it scales its pitch by 1 - |pitch|), air
+    control (pitch, yaw, roll with damping; pitch locked during and just after a flip) with no wheel down, and air
+    throttle."""
     pitch_in, yaw_in, roll_in = c[2], c[3], c[4]
     wl = mat_t_vec(R, w)
     alpha = np.zeros(3)
+    if car[CS_IS_FLIPPING] > 0.5:
+        car[CS_IS_FLIPPING] = 1.0 if car[CS_HAS_FLIPPED] > 0.5 and car[CS_FLIP_TIME] < _FLIP_TORQUE_TIME else 0.0
+    flipping = car[CS_IS_FLIPPING] > 0.5
     air_control = True
-    flip_time = car[CS_FLIP_TIME]
-    if car[CS_HAS_FLIPPED] > 0.5 and flip_time < C.FLIP_TORQUE_TIME:
+    if flipping:
         tx = car[CS_FLIP_TORQUE_X]
         ty = car[CS_FLIP_TORQUE_Y]
-        if tx != 0.0 or ty != 0.0:
+        if tx != 0.0 or ty != 0.0:  # not a stall
             air_control = False
             if ty != 0.0 and pitch_in != 0.0 and (ty > 0.0) == (pitch_in > 0.0):
-                ty = 0.0  # flip cancel: pulling against the flip stops its pitch and frees air control
+                ty *= 1.0 - min(abs(pitch_in), 1.0)  # flip cancel: frees air control, pitch stays locked
                 air_control = True
             alpha[0] += C.FLIP_TORQUE_X * tx
             alpha[1] += C.FLIP_TORQUE_Y * ty
-    air_control = air_control and car[CS_IS_AUTOFLIPPING] < 0.5
+    air_control = air_control and car[CS_IS_AUTOFLIPPING] < 0.5 and air_control_allowed
     if air_control:
         pitch_scale = 1.0
-        if car[CS_HAS_FLIPPED] > 0.5 and flip_time < C.FLIP_TORQUE_TIME + C.FLIP_PITCHLOCK_EXTRA_TIME:
+        if flipping or (car[CS_HAS_FLIPPED] > 0.5 and car[CS_FLIP_TIME] < _FLIP_PITCHLOCK_TIME):
             pitch_scale = 0.0
         up_p = pitch_in * pitch_scale
         alpha[0] -= _AIR_TORQUE[2] * roll_in + _AIR_DAMPING[2] * wl[0]
         alpha[1] -= _AIR_TORQUE[0] * up_p + _AIR_DAMPING[0] * wl[1] * (1.0 - abs(up_p))
         alpha[2] += _AIR_TORQUE[1] * yaw_in - _AIR_DAMPING[1] * wl[2] * (1.0 - abs(yaw_in))
     w += mat_vec(R, alpha) * dt
-    v += frame.fwd * (C.THROTTLE_AIR_ACCEL * c[0] * dt)
+    if c[0] != 0.0:
+        v += frame.fwd * (C.THROTTLE_AIR_ACCEL * c[0] * dt)
+        force_dv += frame.fwd * (C.THROTTLE_AIR_ACCEL * c[0] * dt)
 
 
 @njit(cache=True, inline="always")
-def _update_jump(on_ground, jump, jump_pressed, up, m, car, v, dt):
-    """RocketSim's ``_UpdateJump``: an impulse on the press, then a hold force for 0.025 to 0.2 s."""
+def _update_jump(on_ground, jump, jump_pressed, up, m, car, v, force_dv, dt):
+    """RocketSim's ``_UpdateJump``: an impulse on the press, then a hold force for 0.025 to 0.2 s. The jump's
+    time counts on after the jump until the car lands (has_jumped is cleared then, unless the jump is younger than
+    0.05 s: it may still be leaving the ground)."""
     if on_ground and car[CS_IS_JUMPING] < 0.5:
-        if not (car[CS_HAS_JUMPED] > 0.5 and car[CS_JUMP_TIME] < C.JUMP_MIN_TIME + C.JUMP_RESET_MIN_TIME):
+        if not (car[CS_HAS_JUMPED] > 0.5 and car[CS_JUMP_TIME] < _JUMP_RESET_TIME):
             car[CS_HAS_JUMPED] = 0.0
+            car[CS_JUMP_TIME] = 0.0
     if car[CS_IS_JUMPING] > 0.5:
-        # 1e-6: after 24 ticks the float sum of 1/120 lands a hair under 0.2; the game stops at 24 ticks.
-        still = car[CS_JUMP_TIME] < C.JUMP_MIN_TIME or (jump and car[CS_JUMP_TIME] + 1e-6 < C.JUMP_MAX_TIME)
+        still = car[CS_JUMP_TIME] < _JUMP_MIN_TIME or (jump and car[CS_JUMP_TIME] < _JUMP_MAX_TIME)
         car[CS_IS_JUMPING] = 1.0 if still else 0.0
     elif on_ground and jump_pressed:
         car[CS_IS_JUMPING] = 1.0
@@ -507,10 +546,12 @@ def _update_jump(on_ground, jump, jump_pressed, up, m, car, v, dt):
     if car[CS_IS_JUMPING] > 0.5:
         car[CS_HAS_JUMPED] = 1.0
         accel = m[MUT_JUMP_ACCEL]
-        if car[CS_JUMP_TIME] < C.JUMP_MIN_TIME:
+        if car[CS_JUMP_TIME] < _JUMP_MIN_TIME:
             accel *= C.JUMP_PRE_MIN_ACCEL_SCALE
         v += up * (accel * dt)
-        car[CS_JUMP_TIME] += dt
+        force_dv += up * (accel * dt)
+    if car[CS_IS_JUMPING] > 0.5 or car[CS_HAS_JUMPED] > 0.5:
+        car[CS_JUMP_TIME] = _tick(car[CS_JUMP_TIME], dt)
 
 
 @njit(cache=True, inline="always")
@@ -534,35 +575,38 @@ def _update_auto_flip(jump_pressed, frame, car, v, w, dt):
 
 
 @njit(cache=True, inline="always")
-def _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, car, v, dt):
-    """RocketSim's ``_UpdateDoubleJumpOrFlip``: landing restores both; in the air a new press within 1.25 s of
-    the jump is a flip (past the dodge deadzone) or a double jump; a flip's Z-damping."""
+def _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, car, v, force_dv, dt):
+    """RocketSim's ``_UpdateDoubleJumpOrFlip``: landing restores both and clears the flip's time; in the air a new
+    press within 1.25 s of the jump is a flip (|pitch| + |yaw| + |roll| past the dodge deadzone) or a double
+    jump; a flip's Z-damping (of the velocity before this tick's forces, which Bullet adds after it)."""
     pitch_in, yaw_in, roll_in = c[2], c[3], c[4]
     if on_ground:
         car[CS_HAS_DOUBLE_JUMPED] = 0.0
         car[CS_HAS_FLIPPED] = 0.0
-        car[CS_IS_FLIPPING] = 0.0
         car[CS_AIR_TIME_SINCE_JUMP] = 0.0
+        car[CS_FLIP_TIME] = 0.0
     else:
         if car[CS_HAS_JUMPED] > 0.5 and car[CS_IS_JUMPING] < 0.5:
-            car[CS_AIR_TIME_SINCE_JUMP] += dt
+            car[CS_AIR_TIME_SINCE_JUMP] = _tick(car[CS_AIR_TIME_SINCE_JUMP], dt)
         else:
             car[CS_AIR_TIME_SINCE_JUMP] = 0.0
-        if jump_pressed and car[CS_AIR_TIME_SINCE_JUMP] < C.DOUBLEJUMP_MAX_DELAY \
+        if jump_pressed and car[CS_AIR_TIME_SINCE_JUMP] < _DOUBLEJUMP_MAX_DELAY \
                 and car[CS_IS_AUTOFLIPPING] < 0.5:
             unused = car[CS_HAS_DOUBLE_JUMPED] < 0.5 and car[CS_HAS_FLIPPED] < 0.5
-            if max(abs(yaw_in), abs(pitch_in), abs(roll_in)) >= m[MUT_DODGE_DEADZONE]:
+            if abs(yaw_in) + abs(pitch_in) + abs(roll_in) >= m[MUT_DODGE_DEADZONE]:
                 if unused or m[MUT_UNLIMITED_FLIPS] != 0.0:
                     _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in)
             elif unused or m[MUT_UNLIMITED_DOUBLE_JUMPS] != 0.0:
                 v += up * C.JUMP_IMMEDIATE_VEL  # RocketSim's double jump ignores the mutator's jump impulse
                 car[CS_HAS_DOUBLE_JUMPED] = 1.0
-    if car[CS_HAS_FLIPPED] > 0.5:
-        car[CS_FLIP_TIME] += dt
-        ft = car[CS_FLIP_TIME]
-        car[CS_IS_FLIPPING] = 1.0 if ft <= C.FLIP_TORQUE_TIME else 0.0
-        if ft <= C.FLIP_TORQUE_TIME and ft >= C.FLIP_Z_DAMP_START and (v[2] < 0.0 or ft < C.FLIP_Z_DAMP_END):
-            v[2] *= (1.0 - C.FLIP_Z_DAMP_120) ** (dt * 120.0)
+    if car[CS_IS_FLIPPING] > 0.5:
+        car[CS_FLIP_TIME] = ft = _tick(car[CS_FLIP_TIME], dt)
+        if ft <= _FLIP_TORQUE_TIME:
+            vz = v[2] - force_dv[2]
+            if ft >= _FLIP_Z_DAMP_START and (vz < 0.0 or ft < _FLIP_Z_DAMP_END):
+                v[2] = vz * (1.0 - C.FLIP_Z_DAMP_120) ** (dt * 120.0) + force_dv[2]
+    elif car[CS_HAS_FLIPPED] > 0.5:
+        car[CS_FLIP_TIME] = _tick(car[CS_FLIP_TIME], dt)  # counts on for the pitch lock after the flip
 
 
 @njit(cache=True, inline="always")
@@ -655,6 +699,42 @@ def _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
 
 
 @njit(cache=True)
+def _gyroscopic_step(w, R, inertia, h, out):
+    """The angular-velocity change Bullet's implicit gyroscopic term gives a body turning at ``w`` over ``h``
+    (``btRigidBody::computeGyroscopicImpulseImplicit_Body``: one Newton step of Euler's equations in body axes)."""
+    wb = mat_t_vec(R, w)
+    iw = inertia * wb
+    f = vcross(wb, iw) * h
+    # Columns of the Jacobian J = I + (skew(wb) I - skew(I wb)) h, then J^-1 f by Cramer's rule (Bullet's solve33).
+    c0 = np.array([inertia[0], (wb[2] * inertia[0] - iw[2]) * h, (-wb[1] * inertia[0] + iw[1]) * h])
+    c1 = np.array([(-wb[2] * inertia[1] + iw[2]) * h, inertia[1], (wb[0] * inertia[1] - iw[0]) * h])
+    c2 = np.array([(wb[1] * inertia[2] - iw[1]) * h, (-wb[0] * inertia[2] + iw[0]) * h, inertia[2]])
+    inv_det = 1.0 / vdot(c0, vcross(c1, c2))
+    wb[0] -= inv_det * vdot(f, vcross(c1, c2))
+    wb[1] -= inv_det * vdot(c0, vcross(f, c2))
+    wb[2] -= inv_det * vdot(c0, vcross(c1, f))
+    out[:] = mat_vec(R, wb) - w
+
+
+@njit(cache=True)
+def cancel_gyroscopic(ang_vel, rot, inv_inertia, writable, dt, out):
+    """The angular velocities to hand PyBullet so that, after the gyroscopic step it adds to every rigid body
+    (and cannot be switched off from Python), each car turns at ``ang_vel``: RocketSim's cars have no gyroscopic
+    term (``m_rigidbodyFlags = 0``). Solves w + gyro(w) = target by fixed-point iteration (the map contracts by
+    about dt |w| on a car's inertia ratios, below 0.1 at the 5.5 rad/s cap)."""
+    step = np.empty(3)
+    for i in range(ang_vel.shape[0]):
+        out[i] = ang_vel[i]
+        if not writable[i]:
+            continue
+        inertia = 1.0 / inv_inertia[i]
+        for _ in range(8):
+            _gyroscopic_step(out[i], rot[i], inertia, dt, step)
+            for j in range(3):
+                out[i, j] = ang_vel[i, j] - step[j]
+
+
+@njit(cache=True)
 def car_post_tick(vel, ang_vel, active, cs, dt):
     """Speed caps, the supersonic state and demolition timers, after the rigid-body step.
 
@@ -676,12 +756,12 @@ def car_post_tick(vel, ang_vel, active, cs, dt):
         ang = np.sqrt(vdot(ang_vel[i], ang_vel[i]))
         if ang > C.CAR_MAX_ANG_SPEED:
             ang_vel[i] *= C.CAR_MAX_ANG_SPEED / ang
-        if cs[i, CS_IS_SUPERSONIC] > 0.5 and cs[i, CS_SUPERSONIC_TIME] < C.SUPERSONIC_MAINTAIN_MAX_TIME:
+        if cs[i, CS_IS_SUPERSONIC] > 0.5 and cs[i, CS_SUPERSONIC_TIME] < _SUPERSONIC_MAINTAIN_MAX_TIME:
             supersonic = speed >= C.SUPERSONIC_MAINTAIN_MIN_SPEED
         else:
             supersonic = speed >= C.SUPERSONIC_START_SPEED
         if supersonic:
-            cs[i, CS_SUPERSONIC_TIME] = cs[i, CS_SUPERSONIC_TIME] + dt if cs[i, CS_IS_SUPERSONIC] > 0.5 else 0.0
+            cs[i, CS_SUPERSONIC_TIME] = _tick(cs[i, CS_SUPERSONIC_TIME], dt)  # from dt on the first tick, as RocketSim
         else:
             cs[i, CS_SUPERSONIC_TIME] = 0.0
         cs[i, CS_IS_SUPERSONIC] = 1.0 if supersonic else 0.0

@@ -27,7 +27,8 @@ from .body_io import read_rows, unpack_rows
 from .car_config import CarConfig, get_preset
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER,
                          CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_SUPERSONIC,
-                         CS_ON_GROUND, CS_SIZE, boost_pad_tick, car_post_tick, car_pre_tick, interp)
+                         CS_ON_GROUND, CS_SIZE, boost_pad_tick, cancel_gyroscopic, car_post_tick, car_pre_tick,
+                         interp)
 from .events import BallTouch, BoostPickup, Bump, Demo, PhysicsEvent
 from .mutators import DemoMode, MutatorConfig
 from .state import BallHitInfo
@@ -327,6 +328,7 @@ class PhysicsWorld:
         self.car_quat = np.zeros((n, 4))
         self.car_vel = np.zeros((n, 3))
         self.car_ang_vel = np.zeros((n, 3))
+        self._ang_vel_out = np.zeros((n, 3))  # what is handed to PyBullet: car_ang_vel less its gyroscopic step
         self.controls = np.zeros((n, 8))
         self.cs = np.zeros((n, CS_SIZE))
         self.car_arena = np.array([s.arena for s in self._slots], dtype=np.int64)
@@ -381,13 +383,14 @@ class PhysicsWorld:
         cid = self.client
         reset_velocity = pb.resetBaseVelocity
         vel = (self.car_vel * M_PER_UU).tolist()
-        ang = self.car_ang_vel.tolist()
+        writable = self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0)
+        cancel_gyroscopic(self.car_ang_vel, self.car_rot, self.inv_inertia, writable, self.dt, self._ang_vel_out)
+        ang = self._ang_vel_out.tolist()
         if all_writable:
             for body, v, w in zip(self._car_bodies, vel, ang):
                 reset_velocity(body, v, w, cid)
             return
-        writable = (self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0)).tolist()
-        for body, ok, v, w in zip(self._car_bodies, writable, vel, ang):
+        for body, ok, v, w in zip(self._car_bodies, writable.tolist(), vel, ang):
             if ok:
                 reset_velocity(body, v, w, cid)
 

@@ -15,6 +15,7 @@ Interface of both adapters::
     sim.set_controls(throttle=0, steer=0, pitch=0, yaw=0, roll=0, jump=False, boost=False, handbrake=False)
     sim.step(n=1)
     sim.car()  -> dict(pos, vel, ang_vel, rot_mat, on_ground, boost)
+    sim.car_mechanics() -> dict of the jump/flip/supersonic flags and timers (MECHANICS_FIELDS, our CarState names)
     sim.ball() -> dict(pos, vel, ang_vel)
     sim.close()
 """
@@ -75,6 +76,14 @@ def yaw_rot_mat(yaw: float) -> np.ndarray:
     """Rotation matrix (columns forward, right, up) of a level car facing ``yaw``."""
     c, s = math.cos(yaw), math.sin(yaw)
     return np.column_stack(([c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]))
+
+
+# Our CarState name -> RocketSim's CarState name, for ``car_mechanics``.
+MECHANICS_FIELDS = {"has_jumped": "has_jumped", "is_jumping": "is_jumping", "jump_time": "jump_time",
+                    "has_double_jumped": "has_double_jumped", "has_flipped": "has_flipped",
+                    "is_flipping": "is_flipping", "flip_time": "flip_time",
+                    "air_time_since_jump": "air_time_since_jump", "is_supersonic": "is_supersonic",
+                    "supersonic_time": "supersonic_time", "on_ground": "is_on_ground"}
 
 
 def _rot(rot_mat, yaw) -> np.ndarray:
@@ -146,6 +155,10 @@ class RocketSimAdapter:
                     rot_mat=s.rot_mat.as_numpy().astype(np.float64).T,
                     on_ground=bool(s.is_on_ground), boost=float(s.boost))
 
+    def car_mechanics(self) -> dict:
+        s = self._car.get_state()
+        return {ours: getattr(s, theirs) for ours, theirs in MECHANICS_FIELDS.items()}
+
     def ball(self) -> dict:
         s = self.arena.ball.get_state()
         return dict(pos=s.pos.as_numpy().astype(np.float64), vel=s.vel.as_numpy().astype(np.float64),
@@ -197,6 +210,10 @@ class OursAdapter:
         s = self._car.get_state()
         return dict(pos=np.array(s.pos, float), vel=np.array(s.vel, float), ang_vel=np.array(s.ang_vel, float),
                     rot_mat=np.array(s.rot_mat, float), on_ground=bool(s.on_ground), boost=float(s.boost))
+
+    def car_mechanics(self) -> dict:
+        s = self._car.get_state()
+        return {ours: getattr(s, ours) for ours in MECHANICS_FIELDS}
 
     def ball(self) -> dict:
         s = self.arena.ball.get_state()

@@ -17,14 +17,13 @@ from rocketdrl_ma.rlgym import HITBOX_PRESETS, RocketDRLEngine
 # as -2560.0002 there and exactly here, 4.1e-8 in DefaultObs' units (measured); nothing else differs.
 KICKOFF_OBS_ATOL = 1e-6
 # 1 s (15 actions of 8 ticks) of scripted controls from a 2v2 kickoff, max |obs difference| in DefaultObs units
-# over every agent, step and seed; measured: 1.5e-5, 0.0018, 0.0104, 0.198. The aerial's gap is the physics' air
-# control (README, Fidelity), not the engine.
+# over every agent, step and seed; measured: 1.5e-5, 0.0017, 0.0002, 1.5e-5.
 SCRIPTS = {
     "boost": (1e-3, lambda step, agent: controls(throttle=1, boost=1)),
     "powerslide": (5e-3, lambda step, agent: controls(throttle=1, steer=1, handbrake=step > 3)),
-    "steer_jump_flip": (0.02, lambda step, agent: controls(throttle=1, steer=0.5 if agent.startswith("blue") else -0.5,
+    "steer_jump_flip": (2e-3, lambda step, agent: controls(throttle=1, steer=0.5 if agent.startswith("blue") else -0.5,
                                                            jump=step in (4, 6), pitch=-1 if step == 6 else 0)),
-    "aerial": (0.25, lambda step, agent: controls(throttle=1, jump=step in (2, 3, 4), pitch=0.6 if step >= 3 else 0,
+    "aerial": (1e-3, lambda step, agent: controls(throttle=1, jump=step in (2, 3, 4), pitch=0.6 if step >= 3 else 0,
                                                   boost=step >= 3, roll=0.3)),
 }
 
@@ -94,9 +93,8 @@ def test_default_obs_follows_rocketsim_for_one_second(engines, script):
 
 def test_car_fields_follow_rocketsim_tick_by_tick(engines):
     """Every Car field RLGym's components read, through a boost, a jump, a front flip, a jump with yaw and a
-    powerslide. Known gaps of the physics (README, For RLGym users): jump_time counts one tick less and stops at
-    0.2 s, supersonic starts a tick apart, flip_time is not reset on landing; is_flipping flips at flip_time =
-    0.65 s, where float32 and float64 round apart."""
+    powerslide, on every tick: flags equal, timers (jump, flip, air time, supersonic, boost, auto-flip) within 2e-6 s
+    (RocketSim's float32 timers)."""
     def script(tick):
         s = tick // 8
         return controls(throttle=1, steer=0.3, jump=s in (3, 5, 9), pitch=-1 if s == 5 else 0,
@@ -111,10 +109,12 @@ def test_car_fields_follow_rocketsim_tick_by_tick(engines):
         ours, theirs = (env.state.cars["car"] for env in envs)
         for field in ("is_holding_jump", "has_jumped", "is_jumping", "has_flipped", "has_double_jumped", "can_flip",
                       "on_ground", "wheels_with_contact", "is_boosting", "is_autoflipping", "bump_victim_id",
-                      "ball_touches", "team_num", "hitbox_type", "is_demoed"):
+                      "ball_touches", "team_num", "hitbox_type", "is_demoed", "is_supersonic"):
             assert getattr(ours, field) == getattr(theirs, field), (tick, field)
-        for field in ("boost_amount", "boost_active_time", "handbrake", "flip_time", "air_time_since_jump",
-                      "autoflip_timer", "autoflip_direction", "demo_respawn_timer"):
+        for field in ("jump_time", "flip_time", "air_time_since_jump", "supersonic_time", "boost_active_time",
+                      "autoflip_timer", "demo_respawn_timer"):
+            assert getattr(ours, field) == pytest.approx(getattr(theirs, field), abs=2e-6), (tick, field)
+        for field in ("boost_amount", "handbrake", "autoflip_direction"):
             assert getattr(ours, field) == pytest.approx(getattr(theirs, field), abs=2e-3), (tick, field)
         np.testing.assert_allclose(ours.flip_torque, theirs.flip_torque, atol=1e-4)
         np.testing.assert_allclose(ours.physics.position, theirs.physics.position, atol=3.0)
