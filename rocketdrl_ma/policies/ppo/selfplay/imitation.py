@@ -15,19 +15,17 @@ is cloned; the value function is learned by PPO as usual.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
 import numpy as np
 import torch
 
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+from rocketdrl_ma.policies.ppo.config import TrainConfig
+from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.scripted import make_scripted
 
 from .config import ImitateConfig
-
-if TYPE_CHECKING:  # the trainer imports this module, so no runtime import back
-    from rocketdrl_ma.policies.ppo.config import TrainConfig
-    from rocketdrl_ma.policies.ppo.model import PPOModel
 
 DAGGER_EPOCHS = 15  # refit passes over the aggregate after each round (it only grows by a fraction)
 
