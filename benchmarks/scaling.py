@@ -32,10 +32,12 @@ CONFIGS = ("policies/selfplay_1v1.yaml", "policies/penalty_tuned.yaml")
 
 CELL = r"""
 import json, sys, time
-from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
+import yaml
+from rocketdrl_ma.policies.ppo import validate_train_config
 kind, config, workers, iterations, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
 ray = sys.argv[6] if len(sys.argv) > 6 else None
-raw = load_train_config(config)
+with open(config) as f:  # the YAML's mapping (with buffer_size), which the trainer of either checkout validates
+    raw = yaml.safe_load(f)
 if raw.get("selfplay"):
     raw["selfplay"] = {**raw["selfplay"], "imitate": {}}
 if kind == "before":
@@ -70,14 +72,14 @@ else:  # collect: the rollout workers and the policy, no learning
     cfg = validate_train_config(raw)
     wcfg = worker_config(cfg)
     probe = Probe.of(wcfg)
-    model = PPOModel(probe.obs_dim, probe.action, cfg["hidden_units"], cfg["num_layers"], cfg["normalize"],
-                     cfg["init_std"], probe.idle, cfg["features"])
+    model = PPOModel(probe.obs_dim, probe.action, cfg.hidden_units, cfg.num_layers, cfg.normalize, cfg.init_std,
+                     probe.idle, cfg.features)
     pool = None
-    if cfg["selfplay"]:
+    if cfg.selfplay:
         pool = OpponentPool(cfg, out, probe.obs_dim)
         pool.attach(model, 1)
     policy = RolloutPolicy(model, pool.slot_models if pool else None, pool.n_opponents if pool else 0)
-    sync_controls(policy, None, bool(cfg["selfplay"] and cfg["selfplay"]["kickstart"]), pool)
+    sync_controls(policy, None, cfg.teacher_kickstart is not None, pool)
     rollouts = Rollouts(wcfg, policy, WorkerPlan(workers), probe.rows_per_copy)
     rollouts.next_batch()
     start, steps = time.monotonic(), 0

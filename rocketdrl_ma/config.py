@@ -117,17 +117,6 @@ def mode_parameters(mode: str) -> dict[str, Any]:
     return params
 
 
-def optional_section(name: str, section: object, defaults: dict[str, Any]) -> dict[str, Any]:
-    """An optional mapping of a config with ``defaults`` filled in; ``{}`` (off) stays ``{}``. ValueError, naming
-    ``name`` and the allowed keys, for anything but a mapping or for a key ``defaults`` lacks."""
-    if not isinstance(section, dict):
-        raise ValueError(f"{name}: expected a mapping with {sorted(defaults)}, got {section!r}")
-    if not section:
-        return {}
-    reject_unknown(name, section, defaults)
-    return {**defaults, **section}
-
-
 def _check_type(key: str, value: Any, default: Any) -> None:
     if default is None or value is None and key in ("max_cycles", "overtime_limit_s"):
         return

@@ -4,6 +4,7 @@ value in any YAML reads the same way. Imports nothing of the package; everything
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from collections.abc import Collection, Mapping
@@ -30,6 +31,32 @@ def as_mapping(section: str, value: Any, allowed: Collection[str] | None = None)
     if allowed is not None:
         reject_unknown(section, value, allowed)
     return dict(value)
+
+
+def yaml_key(field: dataclasses.Field) -> str:
+    """The key a config file gives a dataclass field by: its ``metadata["key"]`` (for a name Python reserves, such
+    as ``async``), else the field's name."""
+    return field.metadata.get("key", field.name)
+
+
+def section_values(section: str, value: Any, config_class: type) -> dict[str, Any]:
+    """The values of the dataclass ``config_class``'s fields (by field name) from the mapping ``value`` (keyed by
+    ``yaml_key``), defaults filled in. A non-mapping or an unknown key is a ValueError naming ``section`` and the
+    allowed keys; so is a missing key whose field has no default."""
+    fields = dataclasses.fields(config_class)
+    given = as_mapping(section, value, [yaml_key(f) for f in fields])
+    out = {}
+    for f in fields:
+        key = yaml_key(f)
+        if key in given:
+            out[f.name] = given[key]
+        elif f.default is not dataclasses.MISSING:
+            out[f.name] = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            out[f.name] = f.default_factory()
+        else:
+            raise ValueError(f"{section}: {key!r} is required")
+    return out
 
 
 def check_int(field: str, value: Any, minimum: int | None = None, maximum: int | None = None) -> int:

@@ -15,6 +15,8 @@ def _run_league(args: argparse.Namespace) -> int:
 
     overrides = {"results": args.results} if args.results else {}
     cfg = load_league_config(args.config, overrides)
+    if args.verify:
+        return _verify(cfg, args.verify, args.workers)
     planned = schedule(cfg)
     if not args.report_only:
         def show(match, result) -> None:
@@ -31,7 +33,22 @@ def _run_league(args: argparse.Namespace) -> int:
         print(f"{i:2d}. {r.name:24s} mu {r.mu:6.2f}  sigma {r.sigma:5.2f}  ordinal {r.ordinal:6.2f}  "
               f"W-D-L {r.wins}-{r.draws}-{r.losses}")
     print(f"report: {write_report(cfg, table, len(planned), args.config, args.report, results)}")
+    if args.record:
+        from rocketdrl_ma.league.replay_check import write_records
+        print(f"records: {write_records(cfg, results, args.record)}")
     return 0
+
+
+def _verify(cfg, path: str, workers: int) -> int:
+    from rocketdrl_ma.league.replay_check import read_records, verify_records
+
+    differences = verify_records(cfg, path, workers)
+    for line in differences:
+        print(f"DIFFERS {line}")
+    matches, _ = read_records(path)
+    print(f"league {cfg.name}: {len(matches)} recorded matches replayed; "
+          + (f"{len(differences)} differences" if differences else "every field identical, bit for bit"))
+    return 1 if differences else 0
 
 
 def _run_league_bot(args: argparse.Namespace) -> int:
@@ -65,6 +82,12 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
                         "time in this process); results and ratings are the same either way")
     p.add_argument("--ray", default=None, metavar="auto|HOST:PORT",
                    help="play local matches as tasks on a Ray cluster (`pip install rocketdrl-ma[cluster]`)")
+    p.add_argument("--record", default=None, metavar="FILE",
+                   help="also write the stored matches as replay records (seed, sides, score, ticks, digests of the "
+                        "final physics state and the events) and their ratings, as JSON lines")
+    p.add_argument("--verify", default=None, metavar="FILE",
+                   help="play every match recorded in FILE again (no results store) and compare every field and "
+                        "the ratings bit for bit; exit status 1 if anything differs")
     p.set_defaults(run=_run_league)
     b = sub.add_parser("league-bot", help="a remote league entrant: wait for invitations, play them on the server")
     b.add_argument("--entrant", required=True, help="the entrant's name in the league YAML (remote: true)")

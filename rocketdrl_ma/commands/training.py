@@ -21,7 +21,7 @@ def _run_train(args: argparse.Namespace) -> int:
     run_dir = Path(args.run_dir or Path("runs") / name)
     out = Path(args.out or run_dir / "final.pt")
     watch = None
-    if cfg["watch_every"]:  # evaluation episodes for `rocketdrl-ma web`, published on Zenoh
+    if cfg.watch_every:  # evaluation episodes for `rocketdrl-ma web`, published on Zenoh
         from rocketdrl_ma.web.training import broadcast_from_train_config
         watch = broadcast_from_train_config(cfg, run_dir)
     result = train(cfg, out=out, run_dir=run_dir, resume=args.resume, progress=not args.quiet, watch=watch,

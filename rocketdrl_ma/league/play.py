@@ -9,6 +9,7 @@ import time
 from rocketdrl_ma.results import MatchResult
 
 from .config import LeagueConfig
+from .digest import match_digests
 from .schedule import ScheduledMatch
 
 TEAMS = ("blue", "orange")
@@ -45,15 +46,18 @@ def play_local(cfg: LeagueConfig, match: ScheduledMatch) -> MatchResult:
         for policy in policies.values():
             policy.reset(state)
         summary: dict = {}
+        events: list = []
         while env.agents:
             state = env.rules.game_state()
             actions = {a: env.action_parser.encode(policies[a].controls(a, state)) for a in env.agents}
             _, _, _, _, infos = env.step(actions)
             summary = next(iter(infos.values())).get("summary", summary)
+            events += env.game_state.events
         state = env.rules.game_state()
         return _result(cfg, match, summary["score"], state.tick / state.tick_rate,
                        {"where": "local", "overtime": bool(summary.get("overtime", False)),
-                        "stats": summary.get("stats", {}), "team": summary.get("team", {})})
+                        "stats": summary.get("stats", {}), "team": summary.get("team", {}),
+                        **match_digests(env, events)})
     finally:
         env.close()
 

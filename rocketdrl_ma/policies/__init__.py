@@ -1,2 +1,3 @@
 """Scripted bots, PPO self-play training, league evaluation and ratings."""
-from . import minigame_bots  # noqa: F401  (registers the minigame shooters as scripted bots)
+# every module that defines scripted bots, so each is registered (scripted.SCRIPTED_BOTS) whatever was imported first
+from . import minigame_bots, scripted  # noqa: F401

@@ -9,11 +9,11 @@ ends, so a duel learner wants ``learning_rate_schedule: constant`` (linear would
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 from rocketdrl_ma.policies.ppo.checkpoint import read_meta
+from rocketdrl_ma.policies.ppo.config import TrainConfig
 from rocketdrl_ma.policies.ppo.trainer import train
 from rocketdrl_ma.policies.ppo.workers import WorkerPlan
 
@@ -26,13 +26,13 @@ class Phase:
     checkpoint: Path
 
 
-def check_learners(learners: dict[str, dict[str, Any]]) -> None:
+def check_learners(learners: dict[str, TrainConfig]) -> None:
     """Every learner is a self-play config on its own fixed side."""
     if len(learners) < 2:
         raise ValueError(f"duel: expected two learners or more, got {list(learners)}")
     sides = {}
     for name, cfg in learners.items():
-        side = cfg["selfplay"].get("side") if cfg["selfplay"] else None
+        side = cfg.selfplay.side if cfg.selfplay else None
         if side not in ("blue", "orange"):
             raise ValueError(f"{name}: selfplay.side: a duel learner plays one fixed team, 'blue' or 'orange', "
                              f"got {side!r}")
@@ -41,7 +41,7 @@ def check_learners(learners: dict[str, dict[str, Any]]) -> None:
         sides[name] = side
 
 
-def duel(learners: dict[str, dict[str, Any]], root: str | Path, cycles: int, phase_steps: int,
+def duel(learners: dict[str, TrainConfig], root: str | Path, cycles: int, phase_steps: int,
          workers: WorkerPlan | None = None, progress: bool = False) -> list[Phase]:
     """``cycles`` rounds of ``phase_steps`` agent steps for each learner, in the order given; learner ``name``
     runs in ``root/name`` (TensorBoard logs, ``final.pt``, ``snapshots/``), which a later call resumes."""
@@ -57,8 +57,8 @@ def duel(learners: dict[str, dict[str, Any]], root: str | Path, cycles: int, pha
             final = run_dir / "final.pt"
             done = int(read_meta(final)["agent_steps"]) if final.is_file() else 0
             others = [str(run_dirs[other]) for other in learners if other != name]
-            phase_cfg = {**cfg, "max_steps": done + phase_steps,
-                         "selfplay": {**cfg["selfplay"], "opponent_runs": others}}
+            phase_cfg = replace(cfg, max_steps=done + phase_steps,
+                                selfplay=replace(cfg.selfplay, opponent_runs=tuple(others)))
             result = train(phase_cfg, final, run_dir, resume=final if final.is_file() else None, progress=progress,
                            workers=workers)
             phases.append(Phase(cycle, name, result.agent_steps, result.checkpoint))

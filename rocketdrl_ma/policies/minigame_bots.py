@@ -27,7 +27,7 @@ from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, Obstacle
 
-from .scripted import SCRIPTED_BOTS, ScriptedBot, team_frame
+from .scripted import ScriptedBot, team_frame
 
 GOAL_LINE_Y = C.ARENA_EXTENT_Y
 #: a car's centre is this far behind the ball's centre when its nose touches it
@@ -360,6 +360,3 @@ class BarrierShooter(ScriptedBot):
         boost = throttle > 0.0 and abs(angle) < 0.25 and speed < allowed - 250.0 and speed < 2200.0
         handbrake = 1.3 < abs(angle) < 2.4 and speed > 400.0
         return CarControls(throttle=throttle, steer=steer, boost=boost, handbrake=handbrake)
-
-
-SCRIPTED_BOTS[BarrierShooter.bot_name] = BarrierShooter

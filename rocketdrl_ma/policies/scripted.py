@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import math
 from abc import abstractmethod
+from typing import Any, ClassVar
 
 import numpy as np
 
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, agent_team
+from rocketdrl_ma.validation import check_name
 
 from .base import Policy
 from . import rotation
@@ -48,10 +50,28 @@ def drive_to(car_pos: np.ndarray, car_rot: np.ndarray, target: np.ndarray, speed
                        handbrake=SLIDE_ANGLE_RAD < abs(angle) < REVERSE_ANGLE_RAD)
 
 
-class ScriptedBot(Policy):
-    """A hand-written policy; ``bot_name`` is what ``scripted:<bot_name>`` names it by."""
+#: every scripted bot class by its ``bot_name``: a subclass of ``ScriptedBot`` that sets ``bot_name`` registers
+#: itself as it is defined, wherever it lives. The package imports every module of shipped bots
+#: (``policies/__init__.py``), so all of them are here whichever module of the package was imported first.
+SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {}
 
-    bot_name = "scripted"
+
+class ScriptedBot(Policy):
+    """A hand-written policy; ``bot_name`` is what ``scripted:<bot_name>`` names it by. Defining a subclass with
+    its own ``bot_name`` registers it (``SCRIPTED_BOTS``): ``load_policy("scripted:<bot_name>")``, leagues,
+    self-play pools and teachers find it by that name."""
+
+    bot_name: ClassVar[str] = "scripted"
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "bot_name" not in cls.__dict__:  # a base for other bots, or a variant of one: not a bot of its own
+            return
+        check_name("bot_name", cls.bot_name)
+        taken = SCRIPTED_BOTS.get(cls.bot_name)
+        if taken is not None and (taken.__module__, taken.__qualname__) != (cls.__module__, cls.__qualname__):
+            raise ValueError(f"bot_name: {cls.bot_name!r} is taken by {taken.__module__}.{taken.__qualname__}")
+        SCRIPTED_BOTS[cls.bot_name] = cls  # the same class defined again (a module reloaded) replaces itself
 
     @property
     def name(self) -> str:
@@ -330,12 +350,15 @@ def _out_of_goal_mouth(pos: np.ndarray, target: np.ndarray) -> np.ndarray:
     return target
 
 
-SCRIPTED_BOTS: dict[str, type[ScriptedBot]] = {cls.bot_name: cls for cls in (BallChaser, FlipChaser, Goalie, Idle,
-                                                                                 Rotator)}
+def check_bot(field: str, name: Any) -> str:
+    """``name`` if it names a registered scripted bot; else a ValueError naming ``field`` and the bots there are."""
+    if not isinstance(name, str) or name not in SCRIPTED_BOTS:
+        raise ValueError(f"{field}: {name!r} is not one of {sorted(SCRIPTED_BOTS)}")
+    return name
 
 
 def make_scripted(name: str) -> ScriptedBot:
     try:
         return SCRIPTED_BOTS[name]()
-    except KeyError:
+    except (KeyError, TypeError):
         raise ValueError(f"bot: unknown scripted bot {name!r}; allowed: {sorted(SCRIPTED_BOTS)}") from None

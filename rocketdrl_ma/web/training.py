@@ -19,11 +19,15 @@ import logging
 import threading
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rocketdrl_ma.policies.base import Policy
 from rocketdrl_ma.server.protocol import MatchStatus, encode_state, pack
 from rocketdrl_ma.validation import check_name
 from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
+
+if TYPE_CHECKING:  # torch stays unimported until a training actually runs
+    from rocketdrl_ma.policies.ppo.config import TrainConfig
 
 log = logging.getLogger(__name__)
 
@@ -153,13 +157,12 @@ class TrainingBroadcast:
         self.session.close()
 
 
-def broadcast_from_train_config(cfg: dict, run_dir: str | Path) -> TrainingBroadcast | None:
+def broadcast_from_train_config(cfg: TrainConfig, run_dir: str | Path) -> TrainingBroadcast | None:
     """The trainer's broadcast for a validated training config (``watch_every`` 0: none)."""
-    if not cfg.get("watch_every"):
+    if not cfg.watch_every:
         return None
     run_dir = Path(run_dir)
     run = "".join(c if c.isalnum() or c in "_-" else "-" for c in run_dir.resolve().name)[:64] or "run"
-    return TrainingBroadcast(cfg["env"], run, cfg["watch_every"], env_overrides=cfg["env_overrides"],
-                             server=cfg.get("watch_server", "local"),
-                             connect=tuple(cfg.get("watch_connect") or (DEFAULT_ENDPOINT,)),
-                             replay_dir=run_dir / "watch", seed=cfg["seed"] + 20_000)
+    return TrainingBroadcast(cfg.env, run, cfg.watch_every, env_overrides=cfg.env_overrides,
+                             server=cfg.watch_server, connect=cfg.watch_connect or (DEFAULT_ENDPOINT,),
+                             replay_dir=run_dir / "watch", seed=cfg.seed + 20_000)

@@ -16,7 +16,7 @@ from rocketdrl_ma.policies.ppo import load_train_config
 def trained_2v2(tmp_path_factory):
     """A 2v2 checkpoint from one tiny iteration of policies/selfplay_2v2.yaml (no warm start)."""
     tmp = tmp_path_factory.mktemp("team_ckpt")
-    cfg = load_train_config("policies/selfplay_2v2.yaml")
+    cfg = load_train_config("policies/selfplay_2v2.yaml").to_mapping()
     cfg = {**cfg, "env_overrides": {**cfg["env_overrides"], "clock_s": 3.0}, "n_envs": 1, "n_workers": 0,
            "buffer_size": 128, "batch_size": 64, "num_epoch": 1, "hidden_units": 16, "max_steps": 128,
            "summary_freq": 128, "checkpoint_interval": 128,

@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from rocketdrl_ma.cli import main
-from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
+from rocketdrl_ma.policies.ppo import TrainConfig, load_train_config, validate_train_config
 from rocketdrl_ma.policies.ppo.checkpoint import load_model, read_meta
 from rocketdrl_ma.policies.ppo.curves import read_scalars
 from rocketdrl_ma.policies.ppo.model import PPOModel
@@ -19,8 +19,8 @@ TINY = {"env_overrides": OVERRIDES, "n_envs": 2, "buffer_size": 128, "batch_size
         "hidden_units": 32, "summary_freq": 128, "checkpoint_interval": 128, "keep_checkpoints": 1}
 
 
-def _learner(name: str, **selfplay) -> dict:
-    raw = load_train_config(f"policies/penalty_duel_{name}.yaml")
+def _learner(name: str, **selfplay) -> TrainConfig:
+    raw = load_train_config(f"policies/penalty_duel_{name}.yaml").to_mapping()
     return validate_train_config({**raw, **TINY, "selfplay": {**raw["selfplay"], "imitate": {}, "kickstart": {},
                                                               "snapshot_interval": 128, "pool_size": 2,
                                                               **selfplay}})
@@ -73,7 +73,7 @@ def test_one_alternation_trains_each_learner_against_the_others_snapshots(tmp_pa
     configs = []
     for name in ("shooter", "keeper"):
         path = tmp_path / f"{name}.yaml"
-        path.write_text(json.dumps({**_learner(name), "env": "minigames/penalty_duel.yaml"}))
+        path.write_text(json.dumps({**_learner(name).to_mapping(), "env": "minigames/penalty_duel.yaml"}))
         configs.append(str(path))
     root = tmp_path / "duel"
     args = ["duel", *configs, "--cycles", "1", "--phase-steps", "256", "--root", str(root), "--workers", "0",

@@ -52,7 +52,7 @@ def test_car_local_needs_the_team_relative_observation_and_is_named_in_the_confi
     with pytest.raises(ValueError, match="features: 'car_local' needs the team_relative observation"):
         make_features("car_local", 50)
     with pytest.raises(ValueError, match=r"features: 'local' is not one of \['none', 'car_local'\]"):
-        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), "features": "local"})
+        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), "features": "local"})
     model = PPOModel(87, {"kind": "discrete", "n": 90}, 16, 1, True, features="car_local")
     assert model.input_dim == 87 + 12 + 6 and model.policy[0].in_features == model.input_dim
     # the features' constants are not weights: checkpoints hold the same keys with and without them

@@ -41,7 +41,7 @@ def test_a_single_team_game_records_the_bot_for_every_decision():
 
 
 def test_top_level_teacher_keys_are_validated():
-    base = load_train_config("policies/barrier_tuned.yaml")
+    base = load_train_config("policies/barrier_tuned.yaml").to_mapping()
     with pytest.raises(ValueError, match=r"imitate.bot: 'chipper' is not one of"):
         validate_train_config({**base, "imitate": {"bot": "chipper"}})
     with pytest.raises(ValueError, match=r"kickstart: unknown key\(s\) \['teacher'\]"):
@@ -49,7 +49,7 @@ def test_top_level_teacher_keys_are_validated():
     with pytest.raises(ValueError, match="kickstart.weight"):
         validate_train_config({**base, "kickstart": {"bot": "barrier_shooter", "weight": -1}})
     with pytest.raises(ValueError, match="imitate: with selfplay, the teacher goes under selfplay.imitate"):
-        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), "imitate": {"bot": "goalie"}})
+        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), "imitate": {"bot": "goalie"}})
 
 
 def test_the_pool_labels_every_row_with_the_teachers_action():
@@ -70,7 +70,7 @@ def test_the_rollout_env_ships_the_teachers_label_of_every_state_it_returns():
     """The worker-side env of the plain (single-team) path: with a top-level ``kickstart`` it asks one teacher per
     copy, on the state each row is about to act in, and only while the learner wants labels (``ctl_kickstart``).
     Played by torchrl's own rollout loop, with its partial resets of the copies whose episode ended."""
-    cfg = worker_config(validate_train_config({**load_train_config("policies/barrier_tuned.yaml"), **TINY,
+    cfg = worker_config(validate_train_config({**load_train_config("policies/barrier_tuned.yaml").to_mapping(), **TINY,
                                                "env_overrides": {**OVERRIDES, "timeout_s": 2.0},
                                                "kickstart": {"bot": "barrier_shooter"}}))
     env = RolloutEnv(cfg, copies=3, worker=1)
@@ -103,7 +103,7 @@ def test_a_minigame_run_starts_from_the_clone_and_distils_the_teacher(tmp_path, 
     worker: the warm start fits the normaliser once, on the bot's 400 states (PPO's own states do not move it),
     the workers act with the clone and label their states, and the checkpoint reports the teacher term."""
     cfg_path = tmp_path / "barrier.yaml"
-    cfg_path.write_text(json.dumps({**load_train_config("policies/barrier_tuned.yaml"), **TINY,
+    cfg_path.write_text(json.dumps({**load_train_config("policies/barrier_tuned.yaml").to_mapping(), **TINY,
                                     "imitate": {"bot": "barrier_shooter", "decisions": 400, "epochs": 5},
                                     "kickstart": {"bot": "barrier_shooter", "weight": 1.0, "decay_steps": 1024}}))
     assert main(["train", str(cfg_path), "--run-dir", str(tmp_path / "run"), "--workers", str(workers),

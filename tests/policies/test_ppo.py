@@ -124,7 +124,7 @@ def test_update_lowers_the_loss_on_a_toy_batch():
     advantage = (td["action"][:, 0] * obs[:, 0].sign()).unsqueeze(-1)
     batch = TensorDict({"observation": obs, "action": td["action"], "action_log_prob": td["action_log_prob"],
                         "advantage": advantage, "value_target": obs[:, 1:2]}, batch_size=[512])
-    optimizer = torch.optim.Adam(model.parameters(), lr=cfg["learning_rate"])
+    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate)
     epochs = ppo_update(model, make_loss(model, cfg), optimizer, batch, num_epoch=20, batch_size=128)
     assert epochs[-1]["loss_critic"] < 0.2 * epochs[0]["loss_critic"]
     assert epochs[-1]["loss_objective"] < epochs[0]["loss_objective"]

@@ -1,13 +1,14 @@
 """Self-play: the selfplay config section, PFSP weighting, snapshots entering the pool, and a short
 real training run through ``rocketdrl-ma train`` with a self-play YAML."""
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import torch
 
 from rocketdrl_ma.cli import main
-from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
+from rocketdrl_ma.policies.ppo import TrainConfig, load_train_config, validate_train_config
 from rocketdrl_ma.policies.ppo.model import PPOModel, action_spec
 from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.ppo.selfplay.imitation import collect, disagreement
@@ -27,8 +28,8 @@ TINY = {"env_overrides": {"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overtime_
 
 
 def test_selfplay_section_is_validated():
-    base = load_train_config("policies/selfplay_1v1.yaml")
-    assert base["selfplay"]["scripted"] == ["ball_chaser", "flip_chaser", "goalie"]
+    base = load_train_config("policies/selfplay_1v1.yaml").to_mapping()
+    assert base["selfplay"]["scripted"] == ("ball_chaser", "flip_chaser", "goalie")
     raw = {k: v for k, v in base.items()}
     with pytest.raises(ValueError, match=r"selfplay: unknown key\(s\) \['poolsize'\]"):
         validate_train_config({**raw, "selfplay": {"poolsize": 3}})
@@ -72,8 +73,8 @@ def test_pfsp_picks_the_opponents_it_loses_to_more_often():
     assert var.weights()["even"] > var.weights()["we_beat"]
 
 
-def _pool(tmp_path) -> tuple[OpponentPool, PPOModel, dict]:
-    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY})
+def _pool(tmp_path) -> tuple[OpponentPool, PPOModel, TrainConfig]:
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY})
     games = SelfPlayGames(cfg, 1)
     obs_dim = games.observation_space.shape[0]
     model = PPOModel(obs_dim, action_spec(games.action_space), 32, 2, True)
@@ -97,14 +98,14 @@ def test_snapshots_enter_the_pool_and_the_learner_plays_both_sides(tmp_path):
     assert pool.slot_names == ["snapshot:768", "snapshot:512"] and pool.slot_generation == [2, 1]
     assert torch.equal(pool.slot_models[0].value[0].bias, model.value[0].bias)
     probs = pool.probabilities()
-    assert probs[SELF] == pytest.approx(cfg["selfplay"]["self_play"]) and probs.sum() == pytest.approx(1.0)
+    assert probs[SELF] == pytest.approx(cfg.selfplay.self_play) and probs.sum() == pytest.approx(1.0)
 
     # the games of a rollout worker, driven by the rollout policy as a collector would
-    env = RolloutEnv(worker_config(cfg), copies=cfg["n_envs"])
+    env = RolloutEnv(worker_config(cfg), copies=cfg.n_envs)
     policy = RolloutPolicy(model, pool.slot_models, pool.n_opponents)
     sync_controls(policy, None, False, pool)
     td = env.reset()
-    assert td["observation"].shape == (cfg["n_envs"], env.observation_space.shape[0])  # the learner's cars only
+    assert td["observation"].shape == (cfg.n_envs, env.observation_space.shape[0])  # the learner's cars only
     sides, opponents = set(), set()
     for _ in range(150):  # 3 s matches: several episodes per copy
         td = env.step(policy(td))
@@ -118,7 +119,7 @@ def test_snapshots_enter_the_pool_and_the_learner_plays_both_sides(tmp_path):
         td = env.reset(td["next"].update({"_reset": nxt["done"]})) if nxt["done"].any() else td["next"]
     env.close()
     assert sides == {"blue", "orange"}
-    assert sum(pool.picks.values()) > cfg["n_envs"]
+    assert sum(pool.picks.values()) > cfg.n_envs
     assert opponents - {SELF} and {pool.name_of(o) for o in opponents} <= set(pool.opponents) | {"self"}
     assert sum(len(r) for r in pool.pfsp.results.values()) > 0  # results recorded for PFSP
 
@@ -135,25 +136,25 @@ def test_each_copy_of_the_games_plays_the_lone_env_game_of_its_seed():
     from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
     from rocketdrl_ma.policies.scripted import make_scripted
 
-    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY,
                                  "selfplay": {**TINY["selfplay"], "self_play": 0.0}})
-    games = SelfPlayGames(cfg, cfg["n_envs"])
+    games = SelfPlayGames(cfg, cfg.n_envs)
     rng = np.random.default_rng(3)
     actions = rng.uniform(-1.0, 1.0, (60, games.n_rows, 8)).astype(np.float32)
     rows = [games.reset()]
-    copies = np.arange(cfg["n_envs"])
-    games.begin_episodes(copies, np.ones(cfg["n_envs"], int), np.zeros(cfg["n_envs"], int))  # 1: scripted:ball_chaser
+    copies = np.arange(cfg.n_envs)
+    games.begin_episodes(copies, np.ones(cfg.n_envs, int), np.zeros(cfg.n_envs, int))  # 1: scripted:ball_chaser
     results = []
     for a in actions:
         step, _, _ = games.step(a, np.zeros_like(a))
         results.append(step)
         if step.terminated.any() or step.truncated.any():
             break
-    for i in range(cfg["n_envs"]):
+    for i in range(cfg.n_envs):
         learner = "orange_0" if i % 2 == 0 else "blue_0"  # episode 1 of copy i: TEAMS[(i + 1) % 2]
         opponent_name = "blue_0" if learner == "orange_0" else "orange_0"
-        env = RocketDRLParallelEnv(cfg["env"], **{**cfg["env_overrides"], "info_format": "full"})
-        obs, _ = env.reset(seed=cfg["seed"] + i)
+        env = RocketDRLParallelEnv(cfg.env, **{**cfg.env_overrides, "info_format": "full"})
+        obs, _ = env.reset(seed=cfg.seed + i)
         bot = make_scripted("ball_chaser")
         assert np.allclose(rows[0][i], obs[learner], rtol=0.0, atol=1e-6)
         for t, result in enumerate(results):
@@ -173,7 +174,7 @@ def test_each_copy_of_the_games_plays_the_lone_env_game_of_its_seed():
 @pytest.mark.slow
 def test_short_selfplay_run_end_to_end(tmp_path):
     cfg_path = tmp_path / "sp.yaml"
-    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml"), **TINY}))
+    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY}))
     run_dir = tmp_path / "run"
     assert main(["train", str(cfg_path), "--run-dir", str(run_dir), "--quiet"]) == 0
     snaps = sorted(p.name for p in (run_dir / "snapshots").glob("step_*[0-9].pt"))
@@ -186,16 +187,16 @@ def test_short_selfplay_run_end_to_end(tmp_path):
 
 def test_imitation_warm_start_clones_the_bot(tmp_path):
     with pytest.raises(ValueError, match="selfplay.imitate.bot"):
-        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), "selfplay": {"imitate": {"bot": "x"}}})
-    with pytest.raises(ValueError, match=r"selfplay.imitate.dagger_rounds: expected an int >= 0"):
-        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"),
+        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), "selfplay": {"imitate": {"bot": "x"}}})
+    with pytest.raises(ValueError, match=r"selfplay.imitate.dagger_rounds: must be >= 0"):
+        validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(),
                                "selfplay": {"imitate": {"dagger_rounds": -1}}})
-    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY,
                                  "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 300, "epochs": 15}}})
     pool, _, _ = _pool(tmp_path)
     model = PPOModel(pool.obs_dim, {"kind": "box", "dim": 8}, 64, 2, True)
     pool = OpponentPool(cfg, tmp_path, pool.obs_dim)
-    obs, actions = collect(cfg["env"], cfg["env_overrides"], "ball_chaser", "ball_chaser", 100, seed=5)
+    obs, actions = collect(cfg.env, cfg.env_overrides, "ball_chaser", "ball_chaser", 100, seed=5)
     assert obs.shape == (200, pool.obs_dim) and actions.shape == (200, 8)  # both cars
     error_before = np.mean((model.act_deterministic(obs) - actions) ** 2)
     pool.attach(model, 0)  # a fresh run: the warm start runs here
@@ -212,7 +213,7 @@ def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tm
     from rocketdrl_ma.policies.ppo.selfplay.imitation import clone
 
     overrides = {**TINY["env_overrides"], "clock_s": 4.0, "action": "lookup"}
-    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY, "env_overrides": overrides,
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY, "env_overrides": overrides,
                                  "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 300, "epochs": 5,
                                                                               "dagger_rounds": 2,
                                                                               "dagger_decisions": 200}}})
@@ -225,9 +226,9 @@ def test_dagger_labels_the_states_the_clone_drives_into_with_the_bots_actions(tm
     rounds = pool.imitation["dagger_disagreement"]
     assert len(rounds) == 2 and all(0.0 <= r <= 1.0 for r in rounds)
 
-    obs, labels = collect(cfg["env"], overrides, "ball_chaser", "ball_chaser", 120, 7, model, bot_share=0.0)
+    obs, labels = collect(cfg.env, overrides, "ball_chaser", "ball_chaser", 120, 7, model, bot_share=0.0)
     assert labels.dtype == np.int64 and obs.shape == (120, obs_dim)
-    env, bot = RocketDRLParallelEnv(cfg["env"], **overrides), make_scripted("ball_chaser")
+    env, bot = RocketDRLParallelEnv(cfg.env, **overrides), make_scripted("ball_chaser")
     seen, episode = env.reset(seed=7)[0], 0
     for t in range(120):  # the same game again: the clone's car on alternating sides, the bot on the other
         mine = ("blue_0", "orange_0")[episode % 2]
@@ -251,7 +252,7 @@ def test_a_warm_started_run_keeps_the_clones_input_statistics(tmp_path):
     """The normaliser is fitted once, on the imitation data, and PPO's own states do not move it: the clone's
     weights only mean what they were fitted to under those statistics."""
     cfg_path = tmp_path / "sp.yaml"
-    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml"), **TINY, "max_steps": 512,
+    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY, "max_steps": 512,
                                     "selfplay": {**TINY["selfplay"], "imitate": {"decisions": 100, "epochs": 2}}}))
     assert main(["train", str(cfg_path), "--run-dir", str(tmp_path / "run"), "--quiet"]) == 0
     state = torch.load(tmp_path / "run" / "final.pt", weights_only=True)
@@ -261,25 +262,25 @@ def test_a_warm_started_run_keeps_the_clones_input_statistics(tmp_path):
 def test_kickstart_section_and_its_fading_weight():
     from rocketdrl_ma.policies.ppo.selfplay.kickstart import teacher_weight
 
-    base = load_train_config("policies/selfplay_1v1.yaml")
+    base = load_train_config("policies/selfplay_1v1.yaml").to_mapping()
     for bad, match in (({"bot": "x"}, "selfplay.kickstart.bot"), ({"weight": 0}, "selfplay.kickstart.weight"),
                        ({"decay_steps": 0}, "selfplay.kickstart.decay_steps"),
                        ({"teacher": "goalie"}, r"selfplay.kickstart: unknown key\(s\) \['teacher'\]")):
         with pytest.raises(ValueError, match=match):
             validate_train_config({**base, "selfplay": {"kickstart": bad}})
     spec = validate_train_config({**base, "selfplay": {"kickstart": {"weight": 2.0, "decay_steps": 1000}}})
-    spec = spec["selfplay"]["kickstart"]
+    spec = spec.selfplay.kickstart
     assert [teacher_weight(spec, s) for s in (0, 250, 1000, 5000)] == [2.0, 1.5, 0.0, 0.0]
-    assert teacher_weight({**spec, "decay_steps": None}, 10**9) == 2.0 and teacher_weight({}, 0) == 0.0
+    assert teacher_weight(replace(spec, decay_steps=None), 10**9) == 2.0 and teacher_weight(None, 0) == 0.0
 
 
 def test_teacher_labels_are_the_bots_rows_for_the_learners_cars_on_both_sides(tmp_path):
     from rocketdrl_ma.policies.scripted import make_scripted
 
-    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **TINY,
+    cfg = validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY,
                                  "env_overrides": {**TINY["env_overrides"], "action": "lookup"},
                                  "selfplay": {**TINY["selfplay"], "kickstart": {"bot": "goalie"}}})
-    games = SelfPlayGames(cfg, cfg["n_envs"])
+    games = SelfPlayGames(cfg, cfg.n_envs)
     games.reset()
     goalie, sides, rng = make_scripted("goalie"), set(), np.random.default_rng(0)
     for _ in range(60):
@@ -307,7 +308,7 @@ def test_kickstarting_pulls_the_learner_towards_the_teacher_on_its_own_states(tm
     for name, kickstart in (("plain", {}), ("kickstart", {"bot": "ball_chaser", "weight": 5.0, "decay_steps": None})):
         cfg_path = tmp_path / f"{name}.yaml"
         cfg_path.write_text(json.dumps({
-            **load_train_config("policies/selfplay_1v1.yaml"), **TINY, "max_steps": 6144, "num_epoch": 8,
+            **load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY, "max_steps": 6144, "num_epoch": 8,
             "batch_size": 64, "learning_rate": 1e-3, "hidden_units": 64, "features": "car_local",
             "env_overrides": {**TINY["env_overrides"], "clock_s": 10.0, "action": "lookup"},
             "selfplay": {**TINY["selfplay"], "kickstart": kickstart}}))

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from rocketdrl_ma.cli import main
-from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
+from rocketdrl_ma.policies.ppo import load_train_config
 from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
 
@@ -13,7 +13,7 @@ from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
 def tiny(path: str, n_envs: int) -> dict:
     """The config cut down to one iteration of 128 decisions: 3 s matches (so some end and log team metrics), a small network, a
     short warm start."""
-    cfg = load_train_config(path)
+    cfg = load_train_config(path).to_mapping()
     per_iteration = 128 * n_envs * cfg_team_size(cfg)
     return {**cfg, "env_overrides": {**cfg["env_overrides"], "clock_s": 3.0}, "n_envs": n_envs, "n_workers": 0,
             "buffer_size": per_iteration, "batch_size": per_iteration // 2, "num_epoch": 1, "hidden_units": 32,
@@ -29,11 +29,11 @@ def cfg_team_size(cfg: dict) -> int:
 
 @pytest.mark.parametrize("path, size", [("policies/selfplay_2v2.yaml", 2), ("policies/selfplay_3v3.yaml", 3)])
 def test_team_selfplay_config_uses_the_rotator(path, size):
-    cfg = validate_train_config(load_train_config(path))
-    assert cfg["env"] == f"matches/{size}v{size}.yaml"
-    sp = cfg["selfplay"]
-    assert "rotator" in sp["scripted"] and sp["weighting"] == "hard"
-    assert sp["imitate"]["bot"] == "rotator" and sp["kickstart"]["bot"] == "rotator"
+    cfg = load_train_config(path)
+    assert cfg.env == f"matches/{size}v{size}.yaml"
+    sp = cfg.selfplay
+    assert "rotator" in sp.scripted and sp.weighting == "hard"
+    assert sp.imitate.bot == "rotator" and sp.kickstart.bot == "rotator"
 
 
 @pytest.mark.slow

@@ -13,7 +13,7 @@ import psutil
 import pytest
 import torch
 
-from rocketdrl_ma.policies.ppo import load_train_config, train, validate_train_config
+from rocketdrl_ma.policies.ppo import TrainConfig, load_train_config, train, validate_train_config
 from rocketdrl_ma.policies.ppo.checkpoint import load_model
 from rocketdrl_ma.policies.ppo.rollout import RolloutEnv, worker_copies
 from rocketdrl_ma.policies.ppo.trainer import worker_config
@@ -28,8 +28,8 @@ SELFPLAY = {"env_overrides": {"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overt
                          "window": 20, "kickstart": {"bot": "goalie"}}}
 
 
-def _selfplay_cfg(**extra) -> dict:
-    return validate_train_config({**load_train_config("policies/selfplay_1v1.yaml"), **SELFPLAY, **extra})
+def _selfplay_cfg(**extra) -> TrainConfig:
+    return validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **SELFPLAY, **extra})
 
 
 def test_worker_copies_split_evenly_and_every_copy_keeps_its_seed():
@@ -58,7 +58,7 @@ def test_two_workers_give_the_same_losses_for_the_same_seed(tmp_path):
 
 def _start_training(tmp_path: Path, max_steps: int, workers: int = 2) -> tuple[subprocess.Popen, Path]:
     cfg_path = tmp_path / "cfg.yaml"
-    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml"), **SELFPLAY,
+    cfg_path.write_text(json.dumps({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **SELFPLAY,
                                     "max_steps": max_steps}))
     run_dir = tmp_path / "run"
     proc = subprocess.Popen([sys.executable, "-m", "rocketdrl_ma.cli", "train", str(cfg_path), "--run-dir",

@@ -1,13 +1,13 @@
 """PPO training with torch and torchrl on any env config, with the ML-Agents hyperparameter names.
 
-``config.py`` validates the training YAML, ``envs.py`` batches env copies into rows, ``model.py`` is the
+``config.py`` is the training YAML as a typed ``TrainConfig``, ``envs.py`` batches env copies into rows, ``model.py`` is the
 actor-critic, ``trainer.py`` the loop, ``checkpoint.py`` the state dict + JSON format and the playing
 policy the registry loads as ``checkpoint:PATH``, ``evaluate.py`` greedy evaluation.
 """
 from .checkpoint import CheckpointPolicy, load_checkpoint_policy, load_model, save_checkpoint
-from .config import TRAIN_DEFAULTS, load_train_config, validate_train_config
+from .config import TrainConfig, load_train_config, validate_train_config
 from .evaluate import EvalResult, evaluate
 from .trainer import TrainResult, train
 
-__all__ = ["CheckpointPolicy", "EvalResult", "TRAIN_DEFAULTS", "TrainResult", "evaluate", "load_checkpoint_policy",
+__all__ = ["CheckpointPolicy", "EvalResult", "TrainConfig", "TrainResult", "evaluate", "load_checkpoint_policy",
            "load_model", "load_train_config", "save_checkpoint", "train", "validate_train_config"]

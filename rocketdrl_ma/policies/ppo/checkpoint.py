@@ -21,6 +21,7 @@ from rocketdrl_ma.env.actions import make_action_parser
 from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.policies.base import ObservingPolicy
 
+from .config import TrainConfig
 from .model import PPOModel
 
 FORMAT = "rocketdrl_ma.ppo/1"
@@ -32,14 +33,14 @@ def sidecar(path: str | Path, suffix: str) -> Path:
     return p.with_name(p.name[:-3] + suffix if p.name.endswith(".pt") else p.name + suffix)
 
 
-def checkpoint_meta(cfg: dict[str, Any], model: PPOModel, obs_dim: int, agent_steps: int,
+def checkpoint_meta(cfg: TrainConfig, model: PPOModel, obs_dim: int, agent_steps: int,
                     metrics: dict[str, float], difficulty: float | None = None) -> dict[str, Any]:
-    """The JSON beside a checkpoint: the network's shape, the env it plays, the training config, its step count."""
-    net = {"obs_dim": obs_dim, "action": model.action, "hidden_units": cfg["hidden_units"],
-           "num_layers": cfg["num_layers"], "normalize": cfg["normalize"], "features": model.features}
-    env = {"config": cfg["env"], "overrides": cfg["env_overrides"],
-           "resolved": load_config(cfg["env"], cfg["env_overrides"])}
-    return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg, "metrics": metrics,
+    """The JSON beside a checkpoint: the network's shape, the env it plays, the training config (its plain form,
+    ``TrainConfig.to_mapping``), its step count."""
+    net = {"obs_dim": obs_dim, "action": model.action, "hidden_units": cfg.hidden_units,
+           "num_layers": cfg.num_layers, "normalize": cfg.normalize, "features": model.features}
+    env = {"config": cfg.env, "overrides": cfg.env_overrides, "resolved": load_config(cfg.env, cfg.env_overrides)}
+    return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg.to_mapping(), "metrics": metrics,
             "difficulty": difficulty}
 
 

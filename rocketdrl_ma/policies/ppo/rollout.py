@@ -37,6 +37,7 @@ from torchrl.envs import EnvBase
 
 from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
 
+from .config import TrainConfig
 from .envs import EnvPool
 
 
@@ -52,25 +53,25 @@ def _action_spec(space: spaces.Space, rows: int):
 
 
 class RolloutEnv(EnvBase):
-    def __init__(self, cfg: dict[str, Any], copies: int, worker: int = 0):
+    def __init__(self, cfg: TrainConfig, copies: int, worker: int = 0):
         self.cfg, self.worker = cfg, worker
         first_copy = worker * copies
-        self.selfplay = bool(cfg["selfplay"])
+        self.selfplay = cfg.selfplay is not None
         # the kickstart teacher: self-play's (its games label the learner's cars), else a single-team game's
-        kickstart = cfg["selfplay"]["kickstart"] if self.selfplay else cfg["kickstart"]
+        kickstart = cfg.teacher_kickstart
         if self.selfplay:
             from rocketdrl_ma.policies.ppo.selfplay.games import SelfPlayGames
             self.games = SelfPlayGames(cfg, copies, first_copy)
             self.copy_rows = self.games.team_size
         else:
-            self.games = EnvPool(cfg["env"], copies, cfg["seed"] + first_copy, cfg["env_overrides"], cfg["shaping"],
-                                 autoreset=False, teacher=kickstart["bot"] if kickstart else None)
+            self.games = EnvPool(cfg.env, copies, cfg.seed + first_copy, cfg.env_overrides, cfg.shaping,
+                                 autoreset=False, teacher=kickstart.bot if kickstart else None)
             self.copy_rows = len(self.games.agents)
         self.copies, self.rows = copies, self.games.n_rows
         super().__init__(batch_size=torch.Size([self.rows]), device="cpu")
-        self.rng = np.random.default_rng([cfg["seed"], worker])
+        self.rng = np.random.default_rng([cfg.seed, worker])
         self.discrete = isinstance(self.games.action_space, spaces.Discrete)
-        self.kickstart_configured = bool(kickstart)
+        self.kickstart_configured = kickstart is not None
         self.kickstart_on = self.kickstart_configured
         self.difficulty: float | None = None
         self._build_specs()
@@ -243,7 +244,7 @@ class RolloutEnvFactory:
     In a worker process (``seed_torch``) it also seeds torch, whose generator samples the policy's actions
     there, and keeps torch to one thread: a worker is one core's worth of work."""
 
-    cfg: dict[str, Any]
+    cfg: TrainConfig
     copies: int
     worker: int = 0
     seed_torch: bool = False
@@ -251,5 +252,5 @@ class RolloutEnvFactory:
     def __call__(self) -> RolloutEnv:
         if self.seed_torch:
             torch.set_num_threads(1)
-            torch.manual_seed(self.cfg["seed"] * 7919 + self.worker)
+            torch.manual_seed(self.cfg.seed * 7919 + self.worker)
         return RolloutEnv(self.cfg, self.copies, self.worker)

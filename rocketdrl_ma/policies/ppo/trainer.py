@@ -14,9 +14,8 @@ import shutil
 import signal
 import threading
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import torch
@@ -33,6 +32,7 @@ from rocketdrl_ma.policies.ppo.selfplay.pool import OpponentPool
 from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
 
 from .checkpoint import ModelPolicy, checkpoint_meta, read_meta, resolve_checkpoint, save_checkpoint, sidecar
+from .config import TrainConfig
 from .envs import Episode
 from .model import PPOModel, action_spec
 from .rollout import RolloutEnv
@@ -82,16 +82,16 @@ def pick_device(name: str) -> torch.device:
     return torch.device(name)
 
 
-def worker_config(cfg: dict[str, Any]) -> dict[str, Any]:
+def worker_config(cfg: TrainConfig) -> TrainConfig:
     """The training config as a worker needs it: the env config resolved to a mapping, so a worker on another
     machine needs no YAML files."""
-    return {**cfg, "env": load_config(cfg["env"], cfg["env_overrides"]), "env_overrides": {}}
+    return replace(cfg, env=load_config(cfg.env, cfg.env_overrides), env_overrides={})
 
 
-def worker_plan(cfg: dict[str, Any], n_workers: int | None = None, ray: str | None = None) -> WorkerPlan:
+def worker_plan(cfg: TrainConfig, n_workers: int | None = None, ray: str | None = None) -> WorkerPlan:
     """``n_workers`` (else the config's, else the machine's cores) and ``async`` from the config."""
-    chosen = n_workers if n_workers is not None else cfg["n_workers"]
-    return WorkerPlan(default_workers() if chosen is None else int(chosen), bool(cfg["async"]), ray)
+    chosen = n_workers if n_workers is not None else cfg.n_workers
+    return WorkerPlan(default_workers() if chosen is None else int(chosen), cfg.asynchronous, ray)
 
 
 @dataclass
@@ -104,7 +104,7 @@ class Probe:
     idle: np.ndarray | None  # the idle car's controls as a Box action (the Gaussian's initial mean)
 
     @classmethod
-    def of(cls, cfg: dict[str, Any]) -> "Probe":
+    def of(cls, cfg: TrainConfig) -> "Probe":
         env = RolloutEnv(cfg, copies=1)
         try:
             action = action_spec(env.action_space)
@@ -115,26 +115,26 @@ class Probe:
             env.close()
 
 
-def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str | Path | None = None,
+def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | Path | None = None,
           progress: bool = True, watch=None, workers: WorkerPlan | None = None) -> TrainResult:
-    """Train until ``cfg["max_steps"]`` agent steps; write the final checkpoint to ``out``.
+    """Train until ``cfg.max_steps`` agent steps; write the final checkpoint to ``out``.
 
     ``workers`` says where the env copies run (default: ``worker_plan(cfg)``). ``watch`` (e.g.
     ``rocketdrl_ma.web.training.TrainingBroadcast``) gets the playing policy after every iteration it says is
     ``due``: ``watch.publish(iteration, policy)``; the trainer closes it at the end."""
     torch.set_num_threads(1)  # small networks: one thread is fastest and leaves the cores to the workers
-    torch.manual_seed(cfg["seed"])
-    device = pick_device(cfg["device"])
+    torch.manual_seed(cfg.seed)
+    device = pick_device(cfg.device)
     run_dir = Path(run_dir)
     plan = workers or worker_plan(cfg)
     wcfg = worker_config(cfg)
     probe = Probe.of(wcfg)
-    model = PPOModel(probe.obs_dim, probe.action, cfg["hidden_units"], cfg["num_layers"], cfg["normalize"],
-                     cfg["init_std"], probe.idle, cfg["features"]).to(device)
-    optimizer = torch.optim.Adam(model.parameters(), lr=cfg["learning_rate"], eps=1e-5)
+    model = PPOModel(probe.obs_dim, probe.action, cfg.hidden_units, cfg.num_layers, cfg.normalize,
+                     cfg.init_std, probe.idle, cfg.features).to(device)
+    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate, eps=1e-5)
     agent_steps = 0
-    curriculum = cfg["curriculum"]
-    difficulty = curriculum["start"] if curriculum else None
+    curriculum = cfg.curriculum
+    difficulty = curriculum.start if curriculum else None
     if resume is not None:
         path = resolve_checkpoint(resume)
         meta = read_meta(path)
@@ -144,22 +144,22 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
         agent_steps = int(meta["agent_steps"])
         difficulty = meta.get("difficulty", difficulty)
     opponents = None
-    if cfg["selfplay"]:  # the learner is also an opponent; snapshots join the pool
+    if cfg.selfplay:  # the learner is also an opponent; snapshots join the pool
         opponents = OpponentPool(cfg, run_dir, probe.obs_dim)
         opponents.attach(model, agent_steps)
-    elif agent_steps == 0 and cfg["imitate"]:  # a fresh run with a teacher: start from its clone
-        warm_start(model, cfg, log=print, spec=cfg["imitate"])
+    elif agent_steps == 0 and cfg.imitate:  # a fresh run with a teacher: start from its clone
+        warm_start(model, cfg, log=print, spec=cfg.imitate)
     policy = RolloutPolicy(model, opponents.slot_models if opponents else None,
                            opponents.n_opponents if opponents else 0)
     rollouts = Rollouts(wcfg, policy, plan, probe.rows_per_copy)
     loss_module = make_loss(model, cfg)
-    decision_s = wcfg["env"]["tick_skip"] / 120.0
+    decision_s = wcfg.env["tick_skip"] / 120.0
     writer = _summary_writer(run_dir)
     recent: collections.deque = collections.deque(maxlen=SUCCESS_WINDOW)
     since_summary: list = []
     history: list[tuple[int, float, float, int]] = []
-    next_summary = (agent_steps // cfg["summary_freq"] + 1) * cfg["summary_freq"]
-    next_checkpoint = (agent_steps // cfg["checkpoint_interval"] + 1) * cfg["checkpoint_interval"]
+    next_summary = (agent_steps // cfg.summary_freq + 1) * cfg.summary_freq
+    next_checkpoint = (agent_steps // cfg.checkpoint_interval + 1) * cfg.checkpoint_interval
     losses: dict[str, float] = {}
     loss_history: list[dict[str, float]] = []
     lags: list[int] = []
@@ -168,19 +168,19 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
     # A warm-started policy was fitted to inputs scaled by the imitation data's statistics. Fed with PPO's
     # own states they drift (by up to 0.5 in mean and 1.5 in variance over 0.4M self-play steps), and the
     # clone's weights under the drifted statistics lost what PPO's weights under the clone's kept: keep them.
-    frozen_norm = bool(cfg["imitate"] or (cfg["selfplay"] and cfg["selfplay"]["imitate"]))
-    iteration, env_config = 0, wcfg["env"]
-    bar = tqdm(total=cfg["max_steps"], initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
+    frozen_norm = cfg.teacher_imitate is not None
+    iteration, env_config = 0, wcfg.env
+    bar = tqdm(total=cfg.max_steps, initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps, busy_learning = None, agent_steps, 0.0
     stop = StopRequest()
     try:
-        while agent_steps < cfg["max_steps"] and not stop.requested:
+        while agent_steps < cfg.max_steps and not stop.requested:
             # ---- learning rate schedule (ML-Agents' linear: to zero at max_steps)
-            frac = 1.0 - agent_steps / cfg["max_steps"] if cfg["learning_rate_schedule"] == "linear" else 1.0
+            frac = 1.0 - agent_steps / cfg.max_steps if cfg.learning_rate_schedule == "linear" else 1.0
             for group in optimizer.param_groups:
-                group["lr"] = cfg["learning_rate"] * max(frac, 1e-3)
+                group["lr"] = cfg.learning_rate * max(frac, 1e-3)
             # ---- kickstarting: a scripted teacher's actions on the learner's states (selfplay/kickstart.py)
-            kick_weight = teacher_weight(cfg["kickstart"] or cfg["selfplay"].get("kickstart", {}), agent_steps)
+            kick_weight = teacher_weight(cfg.teacher_kickstart, agent_steps)
 
             # ---- what the workers must know, then collect
             sync_controls(policy, difficulty, kick_weight > 0.0, opponents)
@@ -227,22 +227,22 @@ def train(cfg: dict[str, Any], out: str | Path, run_dir: str | Path, resume: str
             perf = {"collect_s": collect_s, "learn_s": learn_s, "agent_steps_per_s": rate, "policy_lag": lag}
             speed = (rate, busy_learning / max(elapsed, 1e-9)) if not first else speed
             # ---- curriculum (ML-Agents' lessons): harder once the last episodes at this level succeed often enough
-            if curriculum and difficulty < 1.0 and len(recent) == SUCCESS_WINDOW and success >= curriculum["threshold"]:
-                difficulty = min(1.0, round(difficulty + curriculum["step"], 6))
+            if curriculum and difficulty < 1.0 and len(recent) == SUCCESS_WINDOW and success >= curriculum.threshold:
+                difficulty = min(1.0, round(difficulty + curriculum.step, 6))
                 recent.clear()
                 if writer is not None:
                     writer.add_scalar("curriculum/difficulty", difficulty, agent_steps)
-            if agent_steps >= next_summary or agent_steps >= cfg["max_steps"]:
+            if agent_steps >= next_summary or agent_steps >= cfg.max_steps:
                 s_success, s_ret = _episode_stats(since_summary)
                 history.append((agent_steps, s_success, s_ret, len(since_summary)))
                 team = match.pop_team_means() if opponents is not None else {}
                 _log(writer, agent_steps, s_success, s_ret, since_summary, losses, perf, optimizer, difficulty, team)
                 since_summary = []
-                next_summary += cfg["summary_freq"]
+                next_summary += cfg.summary_freq
             if agent_steps >= next_checkpoint:
                 _periodic_checkpoint(run_dir, model, optimizer, cfg, probe.obs_dim, agent_steps, success, ret,
                                      difficulty)
-                next_checkpoint += cfg["checkpoint_interval"]
+                next_checkpoint += cfg.checkpoint_interval
     finally:
         stop.restore()
         bar.close()
@@ -323,7 +323,7 @@ class MatchTally:
 
 
 def learn(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim.Optimizer, batch: TensorDict,
-          cfg: dict[str, Any], kick_weight: float, frozen_norm: bool) -> dict[str, float]:
+          cfg: TrainConfig, kick_weight: float, frozen_norm: bool) -> dict[str, float]:
     """GAE over the batch ``[rows, T]`` and ``num_epoch`` passes of PPO minibatches; the last pass's losses."""
     rows, horizon = batch.shape
     obs = batch.get("observation")
@@ -334,11 +334,11 @@ def learn(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim.Opti
         value = model.value(x).reshape(rows, horizon, 1)
         next_value = model.value(model.obs_norm(nxt.get("observation").reshape(rows * horizon, -1)))
         next_value = next_value.reshape(rows, horizon, 1)
-    reward = nxt.get("reward") * cfg["strength"] + nxt.get("shaping").unsqueeze(-1)
+    reward = nxt.get("reward") * cfg.strength + nxt.get("shaping").unsqueeze(-1)
     cut = torch.zeros((rows, horizon, 1), dtype=torch.bool)
-    cut[:, cfg["time_horizon"] - 1::cfg["time_horizon"]] = True  # trajectories cut every time_horizon decisions
+    cut[:, cfg.time_horizon - 1::cfg.time_horizon] = True  # trajectories cut every time_horizon decisions
     advantage, value_target = generalized_advantage_estimate(
-        cfg["gamma"], cfg["lambd"], value, next_value, reward, done=nxt.get("done") | cut,
+        cfg.gamma, cfg.lambd, value, next_value, reward, done=nxt.get("done") | cut,
         terminated=nxt.get("terminated"))
     if not frozen_norm:
         model.obs_norm.update(flat_obs)
@@ -352,7 +352,7 @@ def learn(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim.Opti
         teacher = batch.get("teacher_action")
         flat["teacher_action"] = teacher.reshape(rows * horizon, *teacher.shape[2:])
     model.train()
-    losses = ppo_update(model, loss_module, optimizer, flat, cfg["num_epoch"], cfg["batch_size"], kick_weight)[-1]
+    losses = ppo_update(model, loss_module, optimizer, flat, cfg.num_epoch, cfg.batch_size, kick_weight)[-1]
     model.eval()
     if kick_weight:
         with torch.no_grad():
@@ -400,10 +400,10 @@ def ppo_update(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim
     return per_epoch
 
 
-def make_loss(model: PPOModel, cfg: dict[str, Any]) -> ClipPPOLoss:
+def make_loss(model: PPOModel, cfg: TrainConfig) -> ClipPPOLoss:
     """torchrl's clipped PPO loss over the model (advantages normalised per minibatch, as in ML-Agents)."""
     actor, critic = model.td_modules()
-    return ClipPPOLoss(actor, critic, clip_epsilon=cfg["epsilon"], entropy_coeff=cfg["beta"], critic_coeff=0.5,
+    return ClipPPOLoss(actor, critic, clip_epsilon=cfg.epsilon, entropy_coeff=cfg.beta, critic_coeff=0.5,
                        loss_critic_type="l2", normalize_advantage=True, functional=False)
 
 
@@ -441,14 +441,14 @@ def _log(writer, steps: int, success: float, ret: float, episodes: list, losses:
     writer.flush()
 
 
-def _periodic_checkpoint(run_dir: Path, model: PPOModel, optimizer, cfg: dict, obs_dim: int, steps: int,
+def _periodic_checkpoint(run_dir: Path, model: PPOModel, optimizer, cfg: TrainConfig, obs_dim: int, steps: int,
                          success: float, ret: float, difficulty: float | None) -> None:
     folder = run_dir / "checkpoints"
     metrics = {"train_success_rate": success, "train_mean_return": ret}
     meta = checkpoint_meta(cfg, model, obs_dim, steps, metrics, difficulty)
     save_checkpoint(folder / f"step_{steps}.pt", model, meta, optimizer)
     kept = sorted(folder.glob("step_*[0-9].pt"), key=lambda p: int(p.stem.split("_")[1]))
-    for old in kept[:-cfg["keep_checkpoints"]]:
+    for old in kept[:-cfg.keep_checkpoints]:
         for f in (old, sidecar(old, ".json"), sidecar(old, ".optim.pt")):
             f.unlink(missing_ok=True)
     shutil.copyfile(folder / f"step_{steps}.pt", run_dir / "latest.pt")

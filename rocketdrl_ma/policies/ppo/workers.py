@@ -16,12 +16,12 @@ from __future__ import annotations
 import logging
 import os
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 from tensordict import TensorDictBase
 
+from .config import TrainConfig
 from .rollout import RolloutEnvFactory, worker_copies
 from .rollout_policy import RolloutPolicy
 
@@ -52,15 +52,15 @@ class WorkerPlan:
 
 
 class Rollouts:
-    def __init__(self, cfg: dict[str, Any], policy: RolloutPolicy, plan: WorkerPlan, rows_per_copy: int):
+    def __init__(self, cfg: TrainConfig, policy: RolloutPolicy, plan: WorkerPlan, rows_per_copy: int):
         self.cfg, self.policy, self.plan = cfg, policy, plan
-        self.copies = worker_copies(cfg["n_envs"], plan.processes)
+        self.copies = worker_copies(cfg.n_envs, plan.processes)
         self.rows_per_worker = self.copies * rows_per_copy
         self.rows = self.rows_per_worker * plan.processes
         if plan.asynchronous:  # every worker's batch is one update's buffer
-            self.horizon = max(1, cfg["buffer_size"] // self.rows_per_worker)
+            self.horizon = max(1, cfg.buffer_size // self.rows_per_worker)
         else:
-            self.horizon = max(1, cfg["buffer_size"] // self.rows)
+            self.horizon = max(1, cfg.buffer_size // self.rows)
         self.restarts = 0
         self._collector = None
         self._iterator: Iterator | None = None
@@ -130,8 +130,8 @@ class Rollouts:
     def set_difficulty(self, level: float | None) -> None:
         """Where a minigame curriculum stands: workers (re)built from now on start their games at this level;
         running ones get it through the policy (``ctl_difficulty``)."""
-        if level is not None and self.cfg["env"].get("difficulty") != level:
-            self.cfg = {**self.cfg, "env": {**self.cfg["env"], "difficulty": level}}
+        if level is not None and self.cfg.env.get("difficulty") != level:
+            self.cfg = replace(self.cfg, env={**self.cfg.env, "difficulty": level})
 
     def describe(self) -> str:
         if self.plan.n_workers == 0:

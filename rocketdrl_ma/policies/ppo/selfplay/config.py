@@ -1,64 +1,132 @@
-"""The ``selfplay:`` section of a training YAML (empty: ordinary PPO, every agent the learner).
-
-- ``snapshot_interval``: agent steps between snapshots of the learner; each becomes a playable
-  checkpoint (``RUN_DIR/snapshots/step_N.pt``) and an opponent in the pool.
-- ``pool_size``: how many of the most recent snapshots stay in the pool.
-- ``scripted``: scripted bots that are always in the pool (``ball_chaser``, ``goalie``, ``idle``).
-- ``self_play``: share of episodes against the current policy itself (not through PFSP).
-- ``weighting``, ``p``, ``window``: prioritised fictitious self-play over the pool (``pfsp.py``).
-- ``imitate``: ``{bot, opponent, decisions, epochs, dagger_rounds, dagger_decisions}``: clone a scripted
-  bot before the first update, then refine the clone by DAgger rounds (``imitation.py``); empty: start
-  from scratch.
-- ``kickstart``: ``{bot, weight, decay_steps}``: a scripted teacher whose actions on the learner's own
-  states add a distillation term to PPO's loss, fading out over ``decay_steps`` (``kickstart.py``);
-  empty: none.
-- ``side``: ``alternate`` (the learner swaps teams every episode: one policy for both, as in a match) or
-  ``blue`` / ``orange``: the learner always plays that team, for a game whose teams have different jobs (the
-  penalty duel's shooter and keeper, ``policies/duel.py``).
-- ``opponent_runs``: run directories of *another* learner; the snapshot slots then hold the newest snapshots
-  of those runs (re-read at every snapshot interval) instead of this run's own, which are still written for
-  the other learner to read. Their networks must be shaped like this learner's. Empty: this run's own.
-"""
+"""The ``selfplay:`` section of a training YAML as a ``SelfPlayConfig`` (empty or null: ordinary PPO, every agent
+the learner), and its teacher sections ``imitate`` (``ImitateConfig``, ``imitation.py``) and ``kickstart``
+(``KickstartConfig``, ``kickstart.py``), which a game without self-play gives at the top level: one field a key,
+its meaning in the field's docstring."""
 from __future__ import annotations
 
-from typing import Any
+from dataclasses import dataclass
 
-from rocketdrl_ma.config import optional_section
-from rocketdrl_ma.validation import check_choice, check_int, check_number
+from rocketdrl_ma.policies.scripted import check_bot
+from rocketdrl_ma.validation import check_choice, check_int, check_number, section_values
 
-from .imitation import check_imitate
-from .kickstart import check_kickstart
 from .pfsp import WEIGHTINGS
 
-SELFPLAY_DEFAULTS: dict[str, Any] = {"snapshot_interval": 200_000, "pool_size": 10, "scripted": ["ball_chaser"],
-                                     "self_play": 0.2, "weighting": "hard", "p": 2.0, "window": 50,
-                                     "imitate": {}, "kickstart": {}, "side": "alternate", "opponent_runs": []}
 SIDES = ("alternate", "blue", "orange")
 
 
-def check_selfplay(section: object) -> dict[str, Any]:
-    """Defaults filled in, every value checked; ValueError names the key and the allowed values."""
-    from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
+@dataclass(frozen=True)
+class ImitateConfig:
+    """A warm start: clone a scripted bot before the first PPO update, then refine the clone by DAgger rounds."""
 
-    out = optional_section("selfplay", section, SELFPLAY_DEFAULTS)
-    if not out:
-        return out
+    bot: str = "ball_chaser"
+    """the scripted bot to clone"""
+    opponent: str = "ball_chaser"
+    """the scripted bot it plays against while it is recorded (a game with one team has none)"""
+    decisions: int = 30_000
+    """env decisions recorded for the first fit"""
+    epochs: int = 20
+    """passes of the first fit over them"""
+    dagger_rounds: int = 0
+    """DAgger rounds after it: the clone drives (the bot takes over a decision with probability 1/2, 1/4, ...)
+    and every state it visits is labelled with the bot's action; 0: none"""
+    dagger_decisions: int = 10_000
+    """env decisions of each round"""
+
+
+def check_imitate(section: object, name: str = "selfplay.imitate") -> ImitateConfig | None:
+    """The ``imitate`` mapping (``selfplay.imitate``, or a single-team game's top-level ``imitate``, as ``name``
+    says) with defaults; empty or null: no warm start."""
+    values = section_values(name, section, ImitateConfig)
+    if not section:
+        return None
+    for key in ("bot", "opponent"):
+        check_bot(f"{name}.{key}", values[key])
+    for key in ("decisions", "epochs", "dagger_decisions"):
+        check_int(f"{name}.{key}", values[key], minimum=1)
+    check_int(f"{name}.dagger_rounds", values["dagger_rounds"], minimum=0)
+    return ImitateConfig(**values)
+
+
+@dataclass(frozen=True)
+class KickstartConfig:
+    """A scripted teacher whose actions on the learner's own states add a fading distillation term to PPO's loss."""
+
+    bot: str = "ball_chaser"
+    """the scripted teacher"""
+    weight: float = 1.0
+    """the distillation term's weight at agent step 0"""
+    decay_steps: int | None = 5_000_000
+    """agent steps (of the whole run) over which the weight falls linearly to 0; null: it stays constant"""
+
+
+def check_kickstart(section: object, name: str = "selfplay.kickstart") -> KickstartConfig | None:
+    """The ``kickstart`` mapping (``selfplay.kickstart``, or a single-team game's top-level ``kickstart``, as
+    ``name`` says) with defaults; empty or null: no teacher."""
+    values = section_values(name, section, KickstartConfig)
+    if not section:
+        return None
+    check_bot(f"{name}.bot", values["bot"])
+    values["weight"] = check_number(f"{name}.weight", values["weight"], above=0.0)
+    if values["decay_steps"] is not None:
+        check_int(f"{name}.decay_steps", values["decay_steps"], minimum=1)
+    return KickstartConfig(**values)
+
+
+@dataclass(frozen=True)
+class SelfPlayConfig:
+    """One team learns against an opponent pool of its own snapshots and scripted bots (``pool.py``)."""
+
+    snapshot_interval: int = 200_000
+    """agent steps between snapshots of the learner; each becomes a playable checkpoint
+    (``RUN_DIR/snapshots/step_N.pt``) and an opponent in the pool"""
+    pool_size: int = 10
+    """how many of the most recent snapshots stay in the pool"""
+    scripted: tuple[str, ...] = ("ball_chaser",)
+    """scripted bots that are always in the pool (``scripted:<name>``: ``ball_chaser``, ``goalie``, ...)"""
+    self_play: float = 0.2
+    """share of episodes against the current policy itself (not through PFSP)"""
+    weighting: str = "hard"
+    """prioritised fictitious self-play over the pool (``pfsp.py``): ``hard`` or ``variance``"""
+    p: float = 2.0
+    """the exponent of ``hard``'s ``(1 - x) ** p``"""
+    window: int = 50
+    """recent matches against an opponent behind the learner's win rate against it"""
+    imitate: ImitateConfig | None = None
+    """clone a scripted bot before the first update, then refine the clone by DAgger rounds (``imitation.py``);
+    null: start from scratch"""
+    kickstart: KickstartConfig | None = None
+    """a scripted teacher whose actions on the learner's own states add a distillation term to PPO's loss, fading
+    out over ``decay_steps`` (``kickstart.py``); null: none"""
+    side: str = "alternate"
+    """``alternate`` (the learner swaps teams every episode: one policy for both, as in a match) or ``blue`` /
+    ``orange``: the learner always plays that team, for a game whose teams have different jobs (the penalty
+    duel's shooter and keeper, ``policies/duel.py``)"""
+    opponent_runs: tuple[str, ...] = ()
+    """run directories of *another* learner; the snapshot slots then hold the newest snapshots of those runs
+    (re-read at every snapshot interval) instead of this run's own, which are still written for the other learner
+    to read. Their networks must be shaped like this learner's. Empty: this run's own"""
+
+
+def check_selfplay(section: object) -> SelfPlayConfig | None:
+    """The ``selfplay`` mapping with defaults filled in and every value checked (ValueError names the key and the
+    allowed values); empty or null: no self-play."""
+    values = section_values("selfplay", section, SelfPlayConfig)
+    if not section:
+        return None
     for key in ("snapshot_interval", "pool_size", "window"):
-        check_int(f"selfplay.{key}", out[key], minimum=1)
-    out["self_play"] = check_number("selfplay.self_play", out["self_play"], 0.0, 1.0)
-    out["p"] = check_number("selfplay.p", out["p"], above=0.0)
-    check_choice("selfplay.weighting", out["weighting"], WEIGHTINGS)
-    bots = out["scripted"]
-    if not isinstance(bots, list) or any(b not in SCRIPTED_BOTS for b in bots):
-        raise ValueError(f"selfplay.scripted: expected a list of scripted bots from {sorted(SCRIPTED_BOTS)}, "
-                         f"got {bots!r}")
-    out["scripted"] = list(bots)
-    if out["side"] not in SIDES:
-        raise ValueError(f"selfplay.side: {out['side']!r} is not one of {list(SIDES)}")
-    runs = out["opponent_runs"]
-    if not isinstance(runs, list) or not all(isinstance(run, str) and run for run in runs):
+        check_int(f"selfplay.{key}", values[key], minimum=1)
+    values["self_play"] = check_number("selfplay.self_play", values["self_play"], 0.0, 1.0)
+    values["p"] = check_number("selfplay.p", values["p"], above=0.0)
+    check_choice("selfplay.weighting", values["weighting"], WEIGHTINGS)
+    bots = values["scripted"]
+    if not isinstance(bots, (list, tuple)):
+        raise ValueError(f"selfplay.scripted: expected a list of scripted bots, got {bots!r}")
+    values["scripted"] = tuple(check_bot("selfplay.scripted", bot) for bot in bots)
+    check_choice("selfplay.side", values["side"], SIDES)
+    runs = values["opponent_runs"]
+    if not isinstance(runs, (list, tuple)) or not all(isinstance(run, str) and run for run in runs):
         raise ValueError(f"selfplay.opponent_runs: expected a list of run directories, got {runs!r}")
-    out["opponent_runs"] = list(runs)
-    out["imitate"] = check_imitate(out["imitate"])
-    out["kickstart"] = check_kickstart(out["kickstart"])
-    return out
+    values["opponent_runs"] = tuple(runs)
+    values["imitate"] = check_imitate(values["imitate"])
+    values["kickstart"] = check_kickstart(values["kickstart"])
+    return SelfPlayConfig(**values)

@@ -11,12 +11,12 @@ actions, which need the game state, and take the network opponents' actions as g
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 
 from rocketdrl_ma.env.vector_env import VectorEnv
+from rocketdrl_ma.policies.ppo.config import TrainConfig
 from rocketdrl_ma.policies.ppo.envs import Episode, StepResult
 from rocketdrl_ma.policies.ppo.shaping import make_shaping
 from rocketdrl_ma.policies.scripted import make_scripted
@@ -39,10 +39,10 @@ class MatchResult:
 
 
 class SelfPlayGames:
-    def __init__(self, cfg: dict[str, Any], n_copies: int, first_copy: int = 0):
-        self.cfg, self.sp = cfg, cfg["selfplay"]
-        overrides = {**cfg["env_overrides"], "info_format": "full"}
-        self.vec = VectorEnv(cfg["env"], n_arenas=n_copies, autoreset=False, **overrides)
+    def __init__(self, cfg: TrainConfig, n_copies: int, first_copy: int = 0):
+        self.cfg, self.sp = cfg, cfg.selfplay
+        overrides = {**cfg.env_overrides, "info_format": "full"}
+        self.vec = VectorEnv(cfg.env, n_arenas=n_copies, autoreset=False, **overrides)
         self.envs = self.vec.lanes
         first = self.envs[0]
         self.agents = list(self.vec.possible_agents)
@@ -56,13 +56,13 @@ class SelfPlayGames:
         self.n_rows = n_copies * self.team_size
         self.observation_space: spaces.Box = first.observation_space(first.possible_agents[0])
         self.action_space: spaces.Space = first.action_space(first.possible_agents[0])
-        self.seed = cfg["seed"] + first_copy
+        self.seed = cfg.seed + first_copy
         self.first_copy = first_copy
-        self.shaping = [make_shaping(cfg["shaping"]) for _ in self.envs] if cfg["shaping"] else []
+        self.shaping = [make_shaping(cfg.shaping) for _ in self.envs] if cfg.shaping else []
         # one bot object per copy and name: a bot may remember the game it is playing
-        self.scripted = [[make_scripted(bot) for bot in self.sp["scripted"]] for _ in self.envs]
-        kickstart = self.sp["kickstart"]
-        self.teachers = [make_scripted(kickstart["bot"]) for _ in self.envs] if kickstart else []
+        self.scripted = [[make_scripted(bot) for bot in self.sp.scripted] for _ in self.envs]
+        kickstart = self.sp.kickstart
+        self.teachers = [make_scripted(kickstart.bot) for _ in self.envs] if kickstart else []
         self.learner_team = ["blue"] * len(self.envs)
         self.opponent = [SELF] * len(self.envs)
         self.generation = [0] * len(self.envs)
@@ -91,7 +91,7 @@ class SelfPlayGames:
 
     def _start_episode(self, i: int) -> None:
         self._episodes[i] += 1
-        side = self.sp["side"]
+        side = self.sp.side
         self.learner_team[i] = TEAMS[(self.first_copy + i + self._episodes[i]) % 2] if side == "alternate" else side
         self.opponent[i] = SELF
         if self.shaping:
@@ -135,7 +135,7 @@ class SelfPlayGames:
         until ``reset_copies``. Also returns [copies, 2]: goals for and against the learner's team."""
         learner_actions = np.asarray(learner_actions)
         full = np.zeros((len(self.envs), len(self.agents)) + learner_actions.shape[1:], learner_actions.dtype)
-        n_scripted = len(self.sp["scripted"])
+        n_scripted = len(self.sp.scripted)
         for i, env in enumerate(self.envs):
             rows, side = self.rows(i), self.opponent_team(i)
             full[i, self.team_columns[self.learner_team[i]]] = learner_actions[rows]

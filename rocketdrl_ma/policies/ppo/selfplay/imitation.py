@@ -15,40 +15,19 @@ is cloned; the value function is learned by PPO as usual.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Callable
 
 import numpy as np
 import torch
 
-from rocketdrl_ma.config import optional_section
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+from rocketdrl_ma.policies.ppo.config import TrainConfig
+from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.scripted import make_scripted
 
-if TYPE_CHECKING:  # the ppo package imports this module's config check, so no runtime import back
-    from rocketdrl_ma.policies.ppo.model import PPOModel
+from .config import ImitateConfig
 
-IMITATE_KEYS = {"bot": "ball_chaser", "opponent": "ball_chaser", "decisions": 30_000, "epochs": 20,
-                "dagger_rounds": 0, "dagger_decisions": 10_000}
-INT_MINIMUMS = {"decisions": 1, "epochs": 1, "dagger_rounds": 0, "dagger_decisions": 1}
 DAGGER_EPOCHS = 15  # refit passes over the aggregate after each round (it only grows by a fraction)
-
-
-def check_imitate(section: object, name: str = "selfplay.imitate") -> dict[str, Any]:
-    """The ``imitate`` mapping (``selfplay.imitate``, or a single-team game's top-level ``imitate``, as
-    ``name`` says) with defaults; empty: no warm start."""
-    from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
-
-    out = optional_section(name, section, IMITATE_KEYS)
-    if not out:
-        return out
-    for key in ("bot", "opponent"):
-        if out[key] not in SCRIPTED_BOTS:
-            raise ValueError(f"{name}.{key}: {out[key]!r} is not one of {sorted(SCRIPTED_BOTS)}")
-    for key, least in INT_MINIMUMS.items():
-        value = out[key]
-        if isinstance(value, bool) or not isinstance(value, int) or value < least:
-            raise ValueError(f"{name}.{key}: expected an int >= {least}, got {value!r}")
-    return out
 
 
 def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: int, seed: int,
@@ -129,23 +108,22 @@ def disagreement(model: PPOModel, obs: np.ndarray, actions: np.ndarray) -> float
     return float(np.mean(greedy != actions))
 
 
-def warm_start(model: PPOModel, cfg: dict[str, Any], log: Callable[[str], None] | None = None,
-               spec: dict[str, Any] | None = None) -> dict[str, list]:
-    """Clone ``spec`` (default ``cfg["selfplay"]["imitate"]``) into ``model`` on the training env config, then
-    run its DAgger rounds. Returns the first fit's epoch losses and, per round, the clone's disagreement with
-    the bot on the states it visited itself (measured before that round's refit)."""
-    spec, seed = spec if spec is not None else cfg["selfplay"]["imitate"], cfg["seed"]
-    side = cfg["selfplay"]["side"] if cfg["selfplay"] else "alternate"
-    obs, actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"], spec["decisions"], seed,
-                           side=side)
-    losses = clone(model, obs, actions, spec["epochs"], seed=seed)
+def warm_start(model: PPOModel, cfg: TrainConfig, log: Callable[[str], None] | None = None,
+               spec: ImitateConfig | None = None) -> dict[str, list]:
+    """Clone ``spec`` (default ``cfg.selfplay.imitate``) into ``model`` on the training env config, then run its
+    DAgger rounds. Returns the first fit's epoch losses and, per round, the clone's disagreement with the bot on
+    the states it visited itself (measured before that round's refit)."""
+    spec, seed = spec if spec is not None else cfg.selfplay.imitate, cfg.seed
+    side = cfg.selfplay.side if cfg.selfplay else "alternate"
+    obs, actions = collect(cfg.env, cfg.env_overrides, spec.bot, spec.opponent, spec.decisions, seed, side=side)
+    losses = clone(model, obs, actions, spec.epochs, seed=seed)
     if log:
-        log(f"imitation: cloned {spec['bot']} on {len(obs):,} samples, loss {losses[0]:.3f} -> {losses[-1]:.3f}")
+        log(f"imitation: cloned {spec.bot} on {len(obs):,} samples, loss {losses[0]:.3f} -> {losses[-1]:.3f}")
     rounds = []
-    for k in range(spec["dagger_rounds"]):
+    for k in range(spec.dagger_rounds):
         bot_share = 0.5 ** (k + 1)
-        new_obs, new_actions = collect(cfg["env"], cfg["env_overrides"], spec["bot"], spec["opponent"],
-                                       spec["dagger_decisions"], seed + 1 + k, model, bot_share, side)
+        new_obs, new_actions = collect(cfg.env, cfg.env_overrides, spec.bot, spec.opponent, spec.dagger_decisions,
+                                       seed + 1 + k, model, bot_share, side)
         rounds.append(disagreement(model, new_obs, new_actions))
         obs, actions = np.concatenate([obs, new_obs]), np.concatenate([actions, new_actions])
         clone(model, obs, actions, DAGGER_EPOCHS, seed=seed + 1 + k, fit_normaliser=False)

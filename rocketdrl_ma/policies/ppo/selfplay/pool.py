@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import copy
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import torch
 from torch import nn
 
 from rocketdrl_ma.policies.ppo.checkpoint import checkpoint_meta, load_model, save_checkpoint
+from rocketdrl_ma.policies.ppo.config import TrainConfig
 from rocketdrl_ma.policies.ppo.model import PPOModel
 
 from .games import SELF
@@ -28,20 +28,20 @@ from .pfsp import PFSP
 
 
 class OpponentPool:
-    def __init__(self, cfg: dict[str, Any], run_dir: str | Path, obs_dim: int):
-        self.cfg, self.sp = cfg, cfg["selfplay"]
+    def __init__(self, cfg: TrainConfig, run_dir: str | Path, obs_dim: int):
+        self.cfg, self.sp = cfg, cfg.selfplay
         self.obs_dim = obs_dim
         self.snapshot_dir = Path(run_dir) / "snapshots"
-        self.opponent_runs = [Path(run) for run in self.sp["opponent_runs"]]
-        self.pfsp = PFSP(self.sp["weighting"], self.sp["p"], self.sp["window"])
-        self.scripted = [f"scripted:{bot}" for bot in self.sp["scripted"]]
+        self.opponent_runs = [Path(run) for run in self.sp.opponent_runs]
+        self.pfsp = PFSP(self.sp.weighting, self.sp.p, self.sp.window)
+        self.scripted = [f"scripted:{bot}" for bot in self.sp.scripted]
         for name in self.scripted:
             self.pfsp.add_opponent(name)
-        self.n_slots = self.sp["pool_size"]
+        self.n_slots = self.sp.pool_size
         self.slot_names: list[str | None] = [None] * self.n_slots
         self.slot_generation = [0] * self.n_slots
         self.slot_models: nn.ModuleList | None = None
-        self.next_snapshot = self.sp["snapshot_interval"]
+        self.next_snapshot = self.sp.snapshot_interval
         self.picks: dict[str, int] = {}
         self.imitation: dict[str, list] = {}  # the warm start's report (imitation.warm_start)
 
@@ -66,10 +66,10 @@ class OpponentPool:
         """Snapshot slots shaped like the learner; a fresh run clones the ``imitate`` bot into the learner, a
         resumed one reloads its newest snapshots."""
         self.slot_models = nn.ModuleList(copy.deepcopy(model).requires_grad_(False) for _ in range(self.n_slots))
-        if agent_steps == 0 and self.sp["imitate"]:
+        if agent_steps == 0 and self.sp.imitate:
             from .imitation import warm_start
             self.imitation = warm_start(model, self.cfg, log=print)
-        interval = self.sp["snapshot_interval"]
+        interval = self.sp.snapshot_interval
         self.next_snapshot = (agent_steps // interval + 1) * interval
         self._fill_slots()
 
@@ -125,7 +125,7 @@ class OpponentPool:
         """After each PPO update: snapshot the learner when due; log the pool's win rates."""
         if agent_steps >= self.next_snapshot:
             self.snapshot(model, agent_steps)
-            self.next_snapshot = (agent_steps // self.sp["snapshot_interval"] + 1) * self.sp["snapshot_interval"]
+            self.next_snapshot = (agent_steps // self.sp.snapshot_interval + 1) * self.sp.snapshot_interval
         if writer is not None:
             for name, weight in self.pfsp.weights().items():
                 writer.add_scalar(f"selfplay/pfsp_weight/{name}", weight, agent_steps)
@@ -140,10 +140,10 @@ class OpponentPool:
         if not weights:
             probs[SELF] = 1.0
             return probs
-        probs[SELF] = self.sp["self_play"]
+        probs[SELF] = self.sp.self_play
         index = {self.name_of(i): i for i in range(1, self.n_opponents) if self.name_of(i) is not None}
         for name, weight in weights.items():
-            probs[index[name]] = (1.0 - self.sp["self_play"]) * weight
+            probs[index[name]] = (1.0 - self.sp.self_play) * weight
         return probs
 
     def generations(self) -> np.ndarray:
