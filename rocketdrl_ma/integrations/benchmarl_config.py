@@ -11,6 +11,7 @@ from gymnasium import spaces
 
 from rocketdrl_ma.config import load_config, load_yaml_file
 from rocketdrl_ma.env.actions import make_action_parser
+from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.policies.fixed_team import FixedTeamEnv
 from rocketdrl_ma.validation import as_mapping, check_int
@@ -47,7 +48,9 @@ class RocketDRLTaskConfig:
         if self.opponent is not None and not isinstance(self.opponent, str):
             raise ValueError(f"task opponent: expected a policy such as 'scripted:ball_chaser' or null, got "
                              f"{self.opponent!r}")
-        self.env_config()  # a bad game config fails here, naming the key, not in BenchMARL's first rollout
+        # a bad game config fails here, naming the key, not in BenchMARL's first rollout
+        make_obs_builder(**self.env_config()["observation"])
+        self.action_space()
 
     @classmethod
     def from_dict(cls, values: Any) -> RocketDRLTaskConfig:
@@ -66,8 +69,7 @@ class RocketDRLTaskConfig:
         return load_config(self.config, self.env_overrides())
 
     def action_space(self) -> spaces.Space:
-        spec = dict(self.env_config()["action"])
-        return make_action_parser(spec.pop("name"), **spec).space()
+        return make_action_parser(**self.env_config()["action"]).space()
 
     def make_env(self, render_mode: str | None = None) -> RocketDRLParallelEnv | FixedTeamEnv:
         """The PettingZoo env the task trains on: the game, without the opponent's cars if ``opponent`` is set."""
