@@ -51,7 +51,7 @@ browser:
 	command -v chromium >/dev/null || (apt-get update && apt-get install -y --no-install-recommends chromium)
 
 # The whole suite, slow-marked tests included: correctness is never skipped.
-test: $(STAMP) $(NODE_STAMP) browser
+test: $(STAMP) $(NODE_STAMP) browser $(BENCHMARL_STAMP)
 	$(PY) -m pytest -q -p no:cacheprovider tests
 
 # Everything but the tests marked slow, for quick local iteration.

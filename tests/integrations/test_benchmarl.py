@@ -27,7 +27,9 @@ def experiments(tmp_path_factory) -> list[dict]:
     if not BENCHMARL_PYTHON.exists():
         pytest.fail(f"BenchMARL's venv is missing ({BENCHMARL_PYTHON.relative_to(ROOT)}): run `make benchmarl-venv`")
     out_dir = tmp_path_factory.mktemp("benchmarl")
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "RL_WARNINGS": "0"}  # this tree's rocketdrl_ma, not an installed one
+    # this tree's rocketdrl_ma, not an installed one; one torch thread: two threads on tiny layers on a busy 2-core
+    # machine made the run 4x slower
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "RL_WARNINGS": "0", "OMP_NUM_THREADS": "1"}
     done = subprocess.run([str(BENCHMARL_PYTHON), str(DRIVER), str(out_dir), json.dumps(RUNS)], cwd=out_dir, env=env,
                           capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-4000:]
