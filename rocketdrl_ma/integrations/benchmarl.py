@@ -7,8 +7,10 @@ from benchmarl.models.mlp import MlpConfig
 from rocketdrl_ma.integrations.benchmarl import RocketDRLTask
 
 task = RocketDRLTask.MATCH_2V2.get_task({"max_cycles": 300, "overrides": {"kickoff_countdown_s": 0.0}})
+config = ExperimentConfig.get_from_yaml()
+config.loggers = ["csv"]
 Experiment(task=task, algorithm_config=MappoConfig.get_from_yaml(), model_config=MlpConfig.get_from_yaml(),
-           seed=0, config=ExperimentConfig.get_from_yaml()).run()
+           seed=0, config=config).run()
 ```
 
 The task config (``RocketDRLTaskConfig``; a dict or a YAML file of these keys):

@@ -3,6 +3,7 @@ documents them; this module needs BenchMARL and its torchrl)."""
 from __future__ import annotations
 
 import functools
+import warnings
 from pathlib import Path
 from typing import Any, Callable
 
@@ -21,6 +22,17 @@ def make_torchrl_env(task_config: RocketDRLTaskConfig, seed: int | None, device:
     together, so no mask is needed."""
     return PettingZooWrapper(task_config.make_env(render_mode="rgb_array"), return_state=True,
                              categorical_actions=True, use_mask=False, seed=seed, device=device)
+
+
+@functools.cache
+def video_writable() -> bool:
+    try:
+        import torchvision  # noqa: F401
+    except (ImportError, RuntimeError) as error:
+        warnings.warn(f"no evaluation videos: torchvision does not load beside this torch ({error}); install the "
+                      f"torchvision build that matches torch to get them", stacklevel=2)
+        return False
+    return True
 
 
 def _group_entries(env: EnvBase, groups: list[str], key: str) -> Composite:
@@ -61,7 +73,10 @@ class RocketDRLTaskClass(TaskClass):
         return isinstance(self.task_config.action_space(), spaces.Discrete)
 
     def has_render(self, env: EnvBase) -> bool:
-        return True
+        """The env renders (``rgb_array``), but BenchMARL's CSV and TensorBoard loggers write the evaluation video
+        through torchvision, and PyPI's torchvision (a CUDA build) does not load beside the CPU torch: then no video
+        rather than a crash at the first evaluation."""
+        return video_writable()
 
     def max_steps(self, env: EnvBase) -> int:
         return self.config["max_cycles"]

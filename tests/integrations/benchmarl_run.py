@@ -1,7 +1,7 @@
 """Short BenchMARL experiments on this env, run by test_benchmarl.py in the BenchMARL venv (one process for all, so
 torch, BenchMARL and the physics load once): ``python benchmarl_run.py OUT_DIR RUNS_JSON``, RUNS_JSON a list of
-``{"algorithm": "mappo" | "ippo", "task": <RocketDRLTask member>, "config": <task config dict>}``. Prints one JSON
-line per run with what the test checks."""
+``{"algorithm": "mappo" | "ippo", "task": <RocketDRLTask member>, "config": <task config dict>, "render": bool}``.
+Prints one JSON line per run with what the test checks."""
 from __future__ import annotations
 
 import json
@@ -32,8 +32,9 @@ class LossRecorder(Callback):
                 values.extend(float(v) for v in value.flatten())
 
 
-def run(algorithm: str, task_name: str, task_config: dict, out_dir: str) -> dict:
-    """Two iterations of 64 frames on two games, an evaluation episode, a checkpoint at the end, CSV logs."""
+def run(algorithm: str, task_name: str, task_config: dict, render: bool, out_dir: str) -> dict:
+    """Two iterations of 64 frames on two games, an evaluation episode after each, a checkpoint at the end, CSV
+    logs; ``render``: BenchMARL's default, evaluation videos when its logger can write them."""
     task = getattr(RocketDRLTask, task_name).get_task(task_config)
     config = ExperimentConfig.get_from_yaml()
     config.max_n_iters = 2
@@ -44,7 +45,7 @@ def run(algorithm: str, task_name: str, task_config: dict, out_dir: str) -> dict
     config.evaluation = True
     config.evaluation_interval = 64
     config.evaluation_episodes = 1
-    config.render = False
+    config.render = render
     config.loggers = ["csv"]
     config.create_json = True
     config.save_folder = out_dir
@@ -70,4 +71,4 @@ def run(algorithm: str, task_name: str, task_config: dict, out_dir: str) -> dict
 if __name__ == "__main__":
     out_dir, runs = sys.argv[1], json.loads(sys.argv[2])
     for spec in runs:
-        print(json.dumps(run(spec["algorithm"], spec["task"], spec["config"], out_dir)), flush=True)
+        print(json.dumps(run(spec["algorithm"], spec["task"], spec["config"], spec["render"], out_dir)), flush=True)

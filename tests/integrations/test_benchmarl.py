@@ -16,9 +16,10 @@ BENCHMARL_PYTHON = ROOT / ".venv-benchmarl" / "bin" / "python"
 DRIVER = Path(__file__).with_name("benchmarl_run.py")
 #: a short game: no kickoff countdown, 40 decisions, so the evaluation episode ends quickly
 SHORT_GAME = {"max_cycles": 40, "overrides": {"kickoff_countdown_s": 0.0, "clock_s": 5.0}}
-RUNS = [
-    {"algorithm": "mappo", "task": "MATCH_2V2", "config": SHORT_GAME},
-    {"algorithm": "ippo", "task": "MATCH_2V2", "config": {**SHORT_GAME, "opponent": "scripted:ball_chaser"}},
+RUNS = [  # MAPPO with BenchMARL's default rendering of evaluations (videos if torchvision loads), IPPO without
+    {"algorithm": "mappo", "task": "MATCH_2V2", "config": SHORT_GAME, "render": True},
+    {"algorithm": "ippo", "task": "MATCH_2V2", "config": {**SHORT_GAME, "opponent": "scripted:ball_chaser"},
+     "render": False},
 ]
 
 
