@@ -33,9 +33,9 @@ $(NODE_STAMP): package.json package-lock.json
 wheel: $(STAMP) $(NODE_STAMP)
 	$(PY) -m pip wheel --no-deps -w dist .
 
-# BenchMARL (README, For BenchMARL users) in a venv of its own: BenchMARL 1.5.2 needs torchrl <0.12, the [train]
-# extra torchrl 0.14. One pip command, torch named in it, so torchvision (a BenchMARL dependency) cannot pull a CUDA
-# torch; then the project without extras (its base dependencies hold no torchrl).
+# BenchMARL (README, For BenchMARL users) in a venv of its own: the [benchmarl] extra's torchrl <0.12 and the [train]
+# extra's torchrl 0.14 cannot share one. One pip command with torch named in it, so torchvision (a BenchMARL
+# dependency) cannot pull a CUDA torch.
 BENCHMARL_VENV := .venv-benchmarl
 BENCHMARL_STAMP := $(BENCHMARL_VENV)/.installed
 benchmarl-venv: $(BENCHMARL_STAMP)
@@ -43,7 +43,7 @@ benchmarl-venv: $(BENCHMARL_STAMP)
 $(BENCHMARL_STAMP): pyproject.toml
 	test -x $(BENCHMARL_VENV)/bin/python || $(PYTHON) -m venv $(BENCHMARL_VENV)
 	$(BENCHMARL_VENV)/bin/python -m pip install --quiet --upgrade pip
-	$(BENCHMARL_VENV)/bin/python -m pip install --quiet torch==2.13.0 benchmarl==1.5.2 'torchrl>=0.10,<0.12' -e .
+	$(BENCHMARL_VENV)/bin/python -m pip install --quiet torch==2.13.0 -e '.[benchmarl]'
 	touch $(BENCHMARL_STAMP)
 
 # The browser of tests/web: Debian's chromium (Playwright drives it; no `playwright install`).

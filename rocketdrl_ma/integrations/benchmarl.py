@@ -33,8 +33,9 @@ a fixed opponent, name it in ``opponent``: the orange cars are then driven insid
 BenchMARL sees only the group ``blue``. Opponent pools, PFSP and ratings are this package's own trainer
 (``rocketdrl-ma train``, README *Self-play and leagues*).
 
-BenchMARL 1.5.2 needs ``torchrl>=0.10,<0.12``, older than this package's ``[train]`` extra (torchrl 0.14): it lives
-in its own environment (``make benchmarl-venv``). Importing this module needs neither; the task classes do.
+BenchMARL 1.5.2 needs ``torchrl>=0.10,<0.12``, older than this package's ``[train]`` extra (torchrl 0.14): the
+``[benchmarl]`` extra lives in its own environment (``make benchmarl-venv``). Importing this module needs neither;
+the task classes do.
 """
 from __future__ import annotations
 
@@ -43,8 +44,8 @@ from rocketdrl_ma.integrations.benchmarl_config import SHIPPED_GAMES, RocketDRLT
 __all__ = ["RocketDRLTask", "RocketDRLTaskClass", "RocketDRLTaskConfig", "SHIPPED_GAMES"]
 
 #: how to get the BenchMARL task classes (``RocketDRLTask``, ``RocketDRLTaskClass``) when BenchMARL is missing
-INSTALL_HINT = ("pip install torch==2.13.0 benchmarl==1.5.2 'torchrl>=0.10,<0.12' in a venv of its own; from a clone: "
-                "make benchmarl-venv")
+INSTALL_HINT = ("pip install torch==2.13.0 'rocketdrl-ma[benchmarl]' in a venv without the [train] extra; from a "
+                "clone: make benchmarl-venv")
 
 
 def __getattr__(name: str):
