@@ -19,6 +19,9 @@ from rocketdrl_ma.validation import as_mapping, check_int
 #: the team ``opponent`` plays
 OPPONENT_TEAM = "orange"
 
+#: game keys the task config sets itself -> where from
+SET_BY_THE_TASK = {"max_cycles": "its own max_cycles key", "info_format": "always numeric: BenchMARL logs infos as tensors"}
+
 #: task member -> the shipped YAML it trains on
 SHIPPED_GAMES = {
     "MATCH_1V1": "matches/1v1.yaml", "MATCH_2V2": "matches/2v2.yaml", "MATCH_3V3": "matches/3v3.yaml",
@@ -41,10 +44,9 @@ class RocketDRLTaskConfig:
         self.config = str(self.config)
         check_int("task max_cycles", self.max_cycles, minimum=1)
         self.overrides = as_mapping("task overrides", self.overrides)
-        for key in ("max_cycles", "info_format"):
+        for key, by in SET_BY_THE_TASK.items():
             if key in self.overrides:
-                raise ValueError(f"task overrides: {key!r} is set by the task ("
-                                 f"{'its max_cycles key' if key == 'max_cycles' else 'always numeric'}); remove it")
+                raise ValueError(f"task overrides: {key!r} is set by the task ({by}); remove it")
         if self.opponent is not None and not isinstance(self.opponent, str):
             raise ValueError(f"task opponent: expected a policy such as 'scripted:ball_chaser' or null, got "
                              f"{self.opponent!r}")
@@ -53,13 +55,17 @@ class RocketDRLTaskConfig:
         self.action_space()
 
     @classmethod
+    def keys(cls) -> list[str]:
+        return [f.name for f in dataclasses.fields(cls)]
+
+    @classmethod
     def from_dict(cls, values: Any) -> RocketDRLTaskConfig:
-        return cls(**as_mapping("task", values, [f.name for f in dataclasses.fields(cls)]))
+        return cls(**as_mapping("task", values, cls.keys()))
 
     @classmethod
     def read_yaml(cls, path: str | Path) -> dict[str, Any]:
         """A task YAML's keys (checked; the missing ones are left to the caller's defaults)."""
-        return as_mapping(f"task ({path})", load_yaml_file(path, "task"), [f.name for f in dataclasses.fields(cls)])
+        return as_mapping(f"task ({path})", load_yaml_file(path, "task"), cls.keys())
 
     def env_overrides(self) -> dict[str, Any]:
         return {**self.overrides, "max_cycles": self.max_cycles, "info_format": "numeric"}
