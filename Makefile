@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench venv clean web-deps browser wheel
+.PHONY: demo test test-fast bench venv clean web-deps browser wheel benchmarl-venv
 
 venv: $(STAMP)
 
@@ -33,12 +33,25 @@ $(NODE_STAMP): package.json package-lock.json
 wheel: $(STAMP) $(NODE_STAMP)
 	$(PY) -m pip wheel --no-deps -w dist .
 
+# BenchMARL (README, For BenchMARL users) in a venv of its own: the [benchmarl] extra's torchrl <0.12 and the [train]
+# extra's torchrl 0.14 cannot share one. One pip command with torch named in it, so torchvision (a BenchMARL
+# dependency) cannot pull a CUDA torch.
+BENCHMARL_VENV := .venv-benchmarl
+BENCHMARL_STAMP := $(BENCHMARL_VENV)/.installed
+benchmarl-venv: $(BENCHMARL_STAMP)
+
+$(BENCHMARL_STAMP): pyproject.toml
+	test -x $(BENCHMARL_VENV)/bin/python || $(PYTHON) -m venv $(BENCHMARL_VENV)
+	$(BENCHMARL_VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(BENCHMARL_VENV)/bin/python -m pip install --quiet torch==2.13.0 -e '.[benchmarl]'
+	touch $(BENCHMARL_STAMP)
+
 # The browser of tests/web: Debian's chromium (Playwright drives it; no `playwright install`).
 browser:
 	command -v chromium >/dev/null || (apt-get update && apt-get install -y --no-install-recommends chromium)
 
 # The whole suite, slow-marked tests included: correctness is never skipped.
-test: $(STAMP) $(NODE_STAMP) browser
+test: $(STAMP) $(NODE_STAMP) browser $(BENCHMARL_STAMP)
 	$(PY) -m pytest -q -p no:cacheprovider tests
 
 # Everything but the tests marked slow, for quick local iteration.
@@ -51,4 +64,4 @@ bench: $(STAMP)
 	$(PY) benchmarks/fidelity.py
 
 clean:
-	rm -rf $(VENV) build dist *.egg-info node_modules
+	rm -rf $(VENV) $(BENCHMARL_VENV) build dist *.egg-info node_modules

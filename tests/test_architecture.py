@@ -2,8 +2,8 @@
 
 Every import counts, also those inside functions (lazy imports keep ``--help`` fast; they do not make a circle
 acceptable). The layers, lowest first, are the README's architecture: physics moves bodies, rules decide what
-counts, env speaks PettingZoo, policies learn and play, server speaks Zenoh, web and league sit on the server,
-the command line on everything.
+counts, env speaks PettingZoo, policies learn and play, integrations hand the env to other trainers (BenchMARL),
+server speaks Zenoh, web and league sit on the server, the command line on everything.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rocketdrl_ma"
 #: lowest first; a unit may import its own layer's units only if they are listed together
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("validation",), ("physics",), ("rules",), ("config",), ("env", "rlgym"), ("__init__",), ("policies", "results"),
-    ("server",), ("web", "league"), ("commands",), ("cli",))
+    ("integrations",), ("server",), ("web", "league"), ("commands",), ("cli",))
 
 
 def module_name(path: Path) -> str:
