@@ -1,4 +1,4 @@
-"""Greedy evaluation of a checkpoint on the env config it was trained on."""
+"""Greedy evaluation of a checkpoint on the env config it was trained on, alone or against an opponent policy."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -7,8 +7,14 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .checkpoint import load_model
+from rocketdrl_ma.env.vector_env import VectorEnv
+from rocketdrl_ma.policies.base import Policy
+from rocketdrl_ma.policies.registry import load_policy
+
+from .checkpoint import ModelPolicy, load_model
 from .envs import EnvPool
+
+TEAMS = ("blue", "orange")
 
 
 @dataclass
@@ -44,3 +50,69 @@ def evaluate(checkpoint: str | Path, episodes: int, seed: int = 10_000, n_envs: 
     return EvalResult(len(finished), float(np.mean([e.success for e in finished])),
                       float(np.mean([e.agent_return for e in finished])),
                       float(np.mean([e.length for e in finished])))
+
+
+def evaluate_against(checkpoint: str | Path, opponent: str, episodes: int, seed: int = 10_000, n_envs: int = 4,
+                     side: str | None = None, overrides: dict | None = None) -> EvalResult:
+    """Greedy episodes of the checkpoint's env with the checkpoint on ``side`` and ``opponent`` (a policy spec,
+    ``scripted:goalie`` or ``checkpoint:PATH``) on the other team; success is the checkpoint's team winning (the
+    shooter's goal, the keeper's save).
+
+    ``side`` defaults to the team the checkpoint trained on (``selfplay.side``), else blue. Every car is a
+    ``Policy`` (the checkpoint's observation builder and action parser, the opponent's own), as in a league
+    match, and the env takes their controls through the lossless ``continuous`` parser, so an opponent trained
+    with other sensors or actions (the seed's) plays as it learned. The episodes are those ``evaluate`` plays
+    with the same seed and ``n_envs`` (each copy a fixed quota of its first episodes)."""
+    if episodes < 1:
+        raise ValueError(f"episodes: must be >= 1, got {episodes}")
+    torch.set_num_threads(1)
+    model, meta = load_model(checkpoint)
+    trained_side = (meta["train"].get("selfplay") or {}).get("side")
+    side = side or (trained_side if trained_side in TEAMS else "blue")
+    if side not in TEAMS:
+        raise ValueError(f"side: expected one of {list(TEAMS)}, got {side!r}")
+    env_meta = meta["env"]
+    vec = VectorEnv(env_meta["config"], n_arenas=n_envs, autoreset=False,
+                    **{**env_meta["overrides"], **(overrides or {}), "action": "continuous", "info_format": "full"})
+    try:
+        mine = [a for a in vec.possible_agents if a.startswith(side)]
+        theirs = [a for a in vec.possible_agents if a not in mine]
+        if not theirs:
+            raise ValueError(f"opponent: {env_meta['config']} has no team but {side}'s ({vec.possible_agents}): "
+                             "nobody for the opponent to play")
+        players: list[dict[str, Policy]] = [
+            {**{a: ModelPolicy(model, env_meta["resolved"], f"checkpoint:{checkpoint}") for a in mine},
+             **{a: load_policy(opponent) for a in theirs}} for _ in range(n_envs)]
+        quota = [episodes // n_envs + (copy < episodes % n_envs) for copy in range(n_envs)]
+        finished: list[tuple[bool, float, int]] = []
+        vec.reset(seed=seed)
+        _begin(vec, players, range(n_envs))
+        returns, lengths = np.zeros(n_envs), np.zeros(n_envs, np.int64)
+        columns = [vec.possible_agents.index(a) for a in mine]
+        while any(quota):
+            actions = np.stack([[lane.action_parser.encode(players[k][a].controls(a, lane.game_state))
+                                 for a in vec.possible_agents] for k, lane in enumerate(vec.lanes)])
+            _, rewards, terminated, truncated, infos = vec.step(actions)
+            returns += rewards[:, columns].mean(axis=1)
+            lengths += 1
+            ended = terminated | truncated
+            for k in np.flatnonzero(ended):
+                if quota[k]:
+                    quota[k] -= 1
+                    winner = infos[k][mine[0]].get("summary", {}).get("winner")
+                    finished.append((winner == side, float(returns[k]), int(lengths[k])))
+            if ended.any():
+                vec.reset_arenas(ended)
+                _begin(vec, players, np.flatnonzero(ended))
+                returns[ended], lengths[ended] = 0.0, 0
+    finally:
+        vec.close()
+    success, ret, length = (np.array(column, float) for column in zip(*finished))
+    return EvalResult(len(finished), float(success.mean()), float(ret.mean()), float(length.mean()))
+
+
+def _begin(vec: VectorEnv, players: list[dict[str, Policy]], copies) -> None:
+    for k in copies:
+        state = vec.lanes[int(k)].game_state
+        for policy in players[int(k)].values():
+            policy.reset(state)
