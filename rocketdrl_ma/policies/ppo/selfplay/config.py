@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from rocketdrl_ma.policies.registry import check_teacher
 from rocketdrl_ma.policies.scripted import check_bot
 from rocketdrl_ma.validation import check_choice, check_int, check_number, section_values
 
@@ -19,9 +20,10 @@ class ImitateConfig:
     """A warm start: clone a scripted bot before the first PPO update, then refine the clone by DAgger rounds."""
 
     bot: str = "ball_chaser"
-    """the scripted bot to clone"""
+    """the teacher to clone: a scripted bot's name, or a policy spec (``checkpoint:PATH``: a trained policy
+    labels through its own sensors and actions)"""
     opponent: str = "ball_chaser"
-    """the scripted bot it plays against while it is recorded (a game with one team has none)"""
+    """the bot (or policy spec) it plays against while it is recorded (a game with one team has none)"""
     decisions: int = 30_000
     """env decisions recorded for the first fit"""
     epochs: int = 20
@@ -40,7 +42,7 @@ def check_imitate(section: object, name: str = "selfplay.imitate") -> ImitateCon
     if not section:
         return None
     for key in ("bot", "opponent"):
-        check_bot(f"{name}.{key}", values[key])
+        check_teacher(f"{name}.{key}", values[key])
     for key in ("decisions", "epochs", "dagger_decisions"):
         check_int(f"{name}.{key}", values[key], minimum=1)
     check_int(f"{name}.dagger_rounds", values["dagger_rounds"], minimum=0)
@@ -52,7 +54,7 @@ class KickstartConfig:
     """A scripted teacher whose actions on the learner's own states add a fading distillation term to PPO's loss."""
 
     bot: str = "ball_chaser"
-    """the scripted teacher"""
+    """the teacher: a scripted bot's name, or a policy spec (``checkpoint:PATH``)"""
     weight: float = 1.0
     """the distillation term's weight at agent step 0"""
     decay_steps: int | None = 5_000_000
@@ -65,7 +67,7 @@ def check_kickstart(section: object, name: str = "selfplay.kickstart") -> Kickst
     values = section_values(name, section, KickstartConfig)
     if not section:
         return None
-    check_bot(f"{name}.bot", values["bot"])
+    check_teacher(f"{name}.bot", values["bot"])
     values["weight"] = check_number(f"{name}.weight", values["weight"], above=0.0)
     if values["decay_steps"] is not None:
         check_int(f"{name}.decay_steps", values["decay_steps"], minimum=1)
