@@ -9,7 +9,8 @@ import torch
 from rocketdrl_ma.cli import main
 from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
 from rocketdrl_ma.policies.ppo.checkpoint import checkpoint_meta, save_checkpoint
-from rocketdrl_ma.policies.ppo.evaluate import evaluate, evaluate_against
+from rocketdrl_ma.policies.ppo.evaluate import evaluate, evaluate_against, play_against
+from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.ppo.trainer import Probe
 
@@ -46,6 +47,17 @@ def test_an_opponent_trained_with_the_seeds_sensors_and_actions_plays_as_it_lear
     alone = evaluate(CHECKPOINTS / "penalty_tuned.pt", episodes=4, n_envs=2)
     assert alone.success_rate == 1.0
     assert r.episodes == 4 and r.success_rate < 1.0, "the untrained keeper saved every penalty_tuned shot"
+
+
+def test_any_two_policies_play_and_the_side_decides_whose_win_counts():
+    """Scripted bots on both sides: the scripted shooter scores past an idle keeper and an idle shooter never does."""
+    shooter, idle = (lambda: load_policy("scripted:barrier_shooter")), (lambda: load_policy("scripted:idle"))
+    scores = play_against("minigames/penalty_duel.yaml", SHORT, "blue", shooter, idle, episodes=4, n_envs=2)
+    saves = play_against("minigames/penalty_duel.yaml", SHORT, "orange", idle, shooter, episodes=4, n_envs=2)
+    assert scores.episodes == saves.episodes == 4
+    assert scores.success_rate > 0.0 and saves.success_rate == 1.0 - scores.success_rate  # the same episodes
+    assert play_against("minigames/penalty_duel.yaml", SHORT, "orange", idle, idle, episodes=2,
+                        n_envs=2).success_rate == 1.0  # nobody shoots: every round times out, a miss
 
 
 def test_bad_sides_and_games_without_an_opponent_are_refused(keeper, capsys):

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import torch
@@ -56,33 +57,43 @@ def evaluate_against(checkpoint: str | Path, opponent: str, episodes: int, seed:
                      side: str | None = None, overrides: dict | None = None) -> EvalResult:
     """Greedy episodes of the checkpoint's env with the checkpoint on ``side`` and ``opponent`` (a policy spec,
     ``scripted:goalie`` or ``checkpoint:PATH``) on the other team; success is the checkpoint's team winning (the
-    shooter's goal, the keeper's save).
-
-    ``side`` defaults to the team the checkpoint trained on (``selfplay.side``), else blue. Every car is a
-    ``Policy`` (the checkpoint's observation builder and action parser, the opponent's own), as in a league
-    match, and the env takes their controls through the lossless ``continuous`` parser, so an opponent trained
-    with other sensors or actions (the seed's) plays as it learned. The episodes are those ``evaluate`` plays
-    with the same seed and ``n_envs`` (each copy a fixed quota of its first episodes)."""
+    shooter's goal, the keeper's save). ``side`` defaults to the team the checkpoint trained on
+    (``selfplay.side``), else blue. The episodes are those ``evaluate`` plays with the same seed and ``n_envs``."""
     if episodes < 1:
         raise ValueError(f"episodes: must be >= 1, got {episodes}")
     torch.set_num_threads(1)
     model, meta = load_model(checkpoint)
     trained_side = (meta["train"].get("selfplay") or {}).get("side")
     side = side or (trained_side if trained_side in TEAMS else "blue")
+    env_meta = meta["env"]
+    return play_against(env_meta["config"], {**env_meta["overrides"], **(overrides or {})}, side,
+                        lambda: ModelPolicy(model, env_meta["resolved"], f"checkpoint:{checkpoint}"),
+                        lambda: load_policy(opponent), episodes, seed, n_envs)
+
+
+def play_against(config: str | dict, overrides: dict, side: str, player: Callable[[], Policy],
+                 opponent: Callable[[], Policy], episodes: int, seed: int = 10_000, n_envs: int = 4) -> EvalResult:
+    """Episodes of a two-team game with ``player()`` driving every car of ``side`` and ``opponent()`` the others
+    (one instance per car); success is ``side`` winning, the return that of ``side``'s cars.
+
+    Every car is a ``Policy`` acting through its own observation builder and action parser, as in a league match,
+    and the env takes their controls through the lossless ``continuous`` parser, so a policy trained with other
+    sensors or actions (the seed's) plays as it learned. Each of the ``n_envs`` copies (seeded ``seed + i``) plays
+    a fixed quota of its first episodes, so short episodes are not favoured."""
     if side not in TEAMS:
         raise ValueError(f"side: expected one of {list(TEAMS)}, got {side!r}")
-    env_meta = meta["env"]
-    vec = VectorEnv(env_meta["config"], n_arenas=n_envs, autoreset=False,
-                    **{**env_meta["overrides"], **(overrides or {}), "action": "continuous", "info_format": "full"})
+    if episodes < 1:
+        raise ValueError(f"episodes: must be >= 1, got {episodes}")
+    vec = VectorEnv(config, n_arenas=n_envs, autoreset=False,
+                    **{**overrides, "action": "continuous", "info_format": "full"})
     try:
         mine = [a for a in vec.possible_agents if a.startswith(side)]
         theirs = [a for a in vec.possible_agents if a not in mine]
         if not theirs:
-            raise ValueError(f"opponent: {env_meta['config']} has no team but {side}'s ({vec.possible_agents}): "
+            raise ValueError(f"opponent: {config} has no team but {side}'s ({vec.possible_agents}): "
                              "nobody for the opponent to play")
-        players: list[dict[str, Policy]] = [
-            {**{a: ModelPolicy(model, env_meta["resolved"], f"checkpoint:{checkpoint}") for a in mine},
-             **{a: load_policy(opponent) for a in theirs}} for _ in range(n_envs)]
+        players: list[dict[str, Policy]] = [{**{a: player() for a in mine}, **{a: opponent() for a in theirs}}
+                                            for _ in range(n_envs)]
         quota = [episodes // n_envs + (copy < episodes % n_envs) for copy in range(n_envs)]
         finished: list[tuple[bool, float, int]] = []
         vec.reset(seed=seed)
