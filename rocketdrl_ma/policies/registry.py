@@ -1,7 +1,8 @@
 """Policies by name: ``scripted:ball_chaser`` or ``checkpoint:PATH.pt`` (see ``policies.base`` for the interface).
 
 A training config's teacher (``imitate.bot``, ``kickstart.bot``, ``imitate.opponent``) is a scripted bot's bare
-name, as it always was, or any such spec: a trained checkpoint teaches through its own sensors and actions.
+name, as it always was, or any such spec: a trained checkpoint teaches through its own sensors and actions
+(``load_teacher``; the config checks the name with ``policies.ppo.selfplay.config.check_teacher``).
 """
 from __future__ import annotations
 
@@ -34,21 +35,3 @@ def load_teacher(name: str) -> Policy:
     """A teacher named in a training config: a scripted bot's bare name (``goalie``) or a policy spec."""
     return load_policy(name if ":" in name else f"scripted:{name}")
 
-
-def check_teacher(field: str, name: object) -> str:
-    """``name`` if ``load_teacher`` can load it (a checkpoint's JSON is read now, so a wrong path fails at config
-    load, not in a rollout worker); else ValueError naming ``field`` and what is allowed."""
-    kind, sep, argument = name.partition(":") if isinstance(name, str) else ("", "", "")
-    if isinstance(name, str) and not sep:
-        kind, argument = "scripted", name
-    if kind == "scripted" and argument in SCRIPTED_BOTS:
-        return name
-    if kind == "checkpoint":
-        from .ppo.checkpoint import read_meta
-        try:
-            read_meta(argument)
-        except (OSError, ValueError) as error:
-            raise ValueError(f"{field}: {name!r}: {error}") from None
-        return name
-    raise ValueError(f"{field}: {name!r} is not one of the scripted bots {sorted(SCRIPTED_BOTS)} (bare or "
-                     "'scripted:NAME') nor 'checkpoint:PATH'")

@@ -21,13 +21,13 @@ SHORT = {"action": "lookup", "observation": "team_relative", "timeout_s": 3.0}
 @pytest.fixture(scope="module")
 def keeper(tmp_path_factory) -> Path:
     """An untrained keeper (orange, lookup actions, team-relative observation) saved as a checkpoint."""
-    raw = load_train_config("policies/penalty_duel_keeper.yaml")
+    raw = load_train_config("policies/penalty_duel_keeper.yaml").to_mapping()
     cfg = validate_train_config({**raw, "env_overrides": SHORT, "hidden_units": 16,
                                  "selfplay": {**raw["selfplay"], "imitate": {}, "kickstart": {}}})
     probe = Probe.of(cfg)
     torch.manual_seed(0)
-    model = PPOModel(probe.obs_dim, probe.action, cfg["hidden_units"], cfg["num_layers"], cfg["normalize"],
-                     features=cfg["features"])
+    model = PPOModel(probe.obs_dim, probe.action, cfg.hidden_units, cfg.num_layers, cfg.normalize,
+                     features=cfg.features)
     meta = checkpoint_meta(cfg, model, probe.obs_dim, 0, {})
     return save_checkpoint(tmp_path_factory.mktemp("keeper") / "keeper.pt", model, meta)
 

@@ -6,13 +6,31 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rocketdrl_ma.policies.registry import check_teacher
-from rocketdrl_ma.policies.scripted import check_bot
+from rocketdrl_ma.config import resolve_shipped_path
+from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS, check_bot
 from rocketdrl_ma.validation import check_choice, check_int, check_number, section_values
 
 from .pfsp import WEIGHTINGS
 
 SIDES = ("alternate", "blue", "orange")
+
+
+def check_teacher(field: str, name: object) -> str:
+    """``name`` if ``policies.registry.load_teacher`` can load it: a scripted bot's name (bare or ``scripted:NAME``)
+    or ``checkpoint:PATH`` of a file with its JSON beside it (looked up now, so a wrong path fails at config load,
+    not in a rollout worker); else a ValueError naming ``field`` and what is allowed."""
+    kind, sep, argument = name.partition(":") if isinstance(name, str) else ("", "", "")
+    if isinstance(name, str) and not sep:
+        kind, argument = "scripted", name
+    if kind == "scripted" and argument in SCRIPTED_BOTS:
+        return name
+    if kind == "checkpoint":
+        path = resolve_shipped_path(argument, field)
+        if not path.with_name(path.name.removesuffix(".pt") + ".json").is_file():
+            raise ValueError(f"{field}: checkpoint {str(path)!r} has no JSON of its config beside it")
+        return name
+    raise ValueError(f"{field}: {name!r} is not one of the scripted bots {sorted(SCRIPTED_BOTS)} (bare or "
+                     "'scripted:NAME') nor 'checkpoint:PATH'")
 
 
 @dataclass(frozen=True)
