@@ -33,10 +33,17 @@ def _run_train(args: argparse.Namespace) -> int:
 
 
 def _run_eval(args: argparse.Namespace) -> int:
-    from rocketdrl_ma.policies.ppo import evaluate
+    from rocketdrl_ma.policies.ppo import evaluate, evaluate_against
 
-    r = evaluate(args.checkpoint, args.episodes, seed=args.seed, n_envs=args.n_envs)
-    print(f"{args.checkpoint}: success {r.success_rate:.1%} over {r.episodes} episodes, "
+    if args.opponent is None:
+        if args.side is not None:
+            raise ValueError("--side: only with --opponent (alone, the checkpoint plays every car)")
+        r = evaluate(args.checkpoint, args.episodes, seed=args.seed, n_envs=args.n_envs)
+    else:
+        r = evaluate_against(args.checkpoint, args.opponent, args.episodes, seed=args.seed, n_envs=args.n_envs,
+                             side=args.side)
+    against = "" if args.opponent is None else f" against {args.opponent}"
+    print(f"{args.checkpoint}{against}: success {r.success_rate:.1%} over {r.episodes} episodes, "
           f"mean return {r.mean_return:+.2f}, mean length {r.mean_length:.1f} decisions")
     return 0
 
@@ -89,6 +96,11 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     e.add_argument("--episodes", type=int, default=200)
     e.add_argument("--n-envs", type=int, default=4, help="env copies played side by side")
     e.add_argument("--seed", type=int, default=10_000, help="first env seed (training uses 0..n_envs-1)")
+    e.add_argument("--opponent", default=None, metavar="SPEC",
+                   help="a policy (scripted:goalie, checkpoint:PATH) for the other team's cars; success is then the "
+                        "checkpoint's team winning (e.g. the penalty duel keeper's save)")
+    e.add_argument("--side", default=None, choices=("blue", "orange"),
+                   help="with --opponent: the checkpoint's team (default: the side it trained on, else blue)")
     e.set_defaults(run=_run_eval)
     c = sub.add_parser("curves", help="plot success rate and return vs agent steps from training runs' logs")
     c.add_argument("runs", nargs="+", help="run directories (runs/NAME), optionally LABEL=DIR")

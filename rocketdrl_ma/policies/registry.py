@@ -1,4 +1,9 @@
-"""Policies by name: ``scripted:ball_chaser`` or ``checkpoint:PATH.pt`` (see ``policies.base`` for the interface)."""
+"""Policies by name: ``scripted:ball_chaser`` or ``checkpoint:PATH.pt`` (see ``policies.base`` for the interface).
+
+A training config's teacher (``imitate.bot``, ``kickstart.bot``, ``imitate.opponent``) is a scripted bot's bare
+name, as it always was, or any such spec: a trained checkpoint teaches through its own sensors and actions
+(``load_teacher``; the config checks the name with ``policies.ppo.selfplay.config.check_teacher``).
+"""
 from __future__ import annotations
 
 from typing import Callable
@@ -24,3 +29,9 @@ def load_policy(spec: str) -> Policy:
         raise ValueError(f"policy: {spec!r} is not '<kind>:<argument>' with kind in {sorted(POLICY_KINDS)} "
                          f"(scripted bots: {sorted(SCRIPTED_BOTS)})")
     return POLICY_KINDS[kind](argument)
+
+
+def load_teacher(name: str) -> Policy:
+    """A teacher named in a training config: a scripted bot's bare name (``goalie``) or a policy spec."""
+    return load_policy(name if ":" in name else f"scripted:{name}")
+

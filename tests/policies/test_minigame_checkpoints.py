@@ -1,11 +1,12 @@
 """The shipped minigame checkpoints still play their game: a few greedy episodes on seeds no training run used, at
-difficulty 1, through the same evaluation as the README's results table (``rocketdrl-ma eval``)."""
+difficulty 1, through the same evaluation as the README's results table (``rocketdrl-ma eval``, with
+``--opponent`` for the penalty duel's two learners)."""
 from pathlib import Path
 
 import pytest
 
 from rocketdrl_ma.policies.ppo.checkpoint import load_model
-from rocketdrl_ma.policies.ppo.evaluate import evaluate
+from rocketdrl_ma.policies.ppo.evaluate import evaluate, evaluate_against
 
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "policies" / "checkpoints"
 
@@ -19,3 +20,16 @@ def test_a_shipped_minigame_checkpoint_scores(name):
     result = evaluate(path, episodes=6, seed=90_210, n_envs=2)
     assert result.episodes == 6
     assert result.success_rate > 0.0, f"{name}: no goal in 6 greedy episodes"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name, opponent", [
+    ("penalty_duel_shooter", "scripted:goalie"),
+    ("penalty_duel_shooter", f"checkpoint:{CHECKPOINTS / 'penalty_duel_keeper.pt'}"),
+    ("penalty_duel_keeper", f"checkpoint:{CHECKPOINTS / 'penalty_tuned.pt'}"),
+])
+def test_a_penalty_duel_checkpoint_wins_against_its_opponents(name, opponent):
+    """The shooter scores, the keeper saves, at least once in 6 episodes, each on the side it trained on."""
+    result = evaluate_against(CHECKPOINTS / f"{name}.pt", opponent, episodes=6, seed=90_210, n_envs=2)
+    assert result.episodes == 6
+    assert result.success_rate > 0.0, f"{name} against {opponent}: no win in 6 greedy episodes"

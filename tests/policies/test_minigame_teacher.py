@@ -14,6 +14,7 @@ from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
 from rocketdrl_ma.policies.ppo.envs import EnvPool
 from rocketdrl_ma.policies.ppo.rollout import RolloutEnv
 from rocketdrl_ma.policies.ppo.trainer import worker_config
+from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.scripted import make_scripted
 from rocketdrl_ma.policies.ppo.selfplay.imitation import collect
 
@@ -50,6 +51,33 @@ def test_top_level_teacher_keys_are_validated():
         validate_train_config({**base, "kickstart": {"bot": "barrier_shooter", "weight": -1}})
     with pytest.raises(ValueError, match="imitate: with selfplay, the teacher goes under selfplay.imitate"):
         validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), "imitate": {"bot": "goalie"}})
+
+
+def test_a_trained_checkpoint_teaches_through_its_own_sensors_and_actions():
+    """``imitate.bot: checkpoint:PATH``: penalty_tuned (the seed's sensors and actions, trained on Penalty alone)
+    labels the penalty duel's shooter states (team-relative observation, lookup rows) with its own greedy controls."""
+    spec = "checkpoint:policies/checkpoints/penalty_tuned.pt"
+    overrides = {"action": "lookup", "observation": "team_relative"}
+    obs, labels = collect("minigames/penalty_duel.yaml", overrides, spec, "goalie", 120, seed=2, side="blue")
+    env = RocketDRLParallelEnv("minigames/penalty_duel.yaml", **overrides)
+    teacher, keeper = load_policy(spec), make_scripted("goalie")
+    seen = env.reset(seed=2)[0]
+    for t in range(120):  # the same decisions again, the teacher asked through its own builder and parser
+        assert np.array_equal(seen["blue_0"], obs[t])
+        label = env.action_parser.encode(teacher.controls("blue_0", env.game_state))
+        assert label == labels[t]
+        seen = env.step({"blue_0": label,
+                         "orange_0": env.action_parser.encode(keeper.controls("orange_0", env.game_state))})[0]
+        if not env.agents:
+            seen = env.reset()[0]
+    env.close()
+    assert len(set(labels.tolist())) > 1  # it steers, boosts and shoots: not one row throughout
+    cfg = load_train_config("policies/penalty_duel_shooter.yaml").to_mapping()
+    assert validate_train_config({**cfg, "selfplay": {**cfg["selfplay"], "kickstart": {"bot": spec}}})
+    with pytest.raises(ValueError, match=r"selfplay.kickstart.bot: no such file 'nowhere.pt'"):
+        validate_train_config({**cfg, "selfplay": {**cfg["selfplay"], "kickstart": {"bot": "checkpoint:nowhere.pt"}}})
+    with pytest.raises(ValueError, match=r"selfplay.imitate.opponent: 'scripted:keeper' is not one of"):
+        validate_train_config({**cfg, "selfplay": {**cfg["selfplay"], "imitate": {"opponent": "scripted:keeper"}}})
 
 
 def test_the_pool_labels_every_row_with_the_teachers_action():

@@ -2,12 +2,13 @@
 
 ``config.py`` is the training YAML as a typed ``TrainConfig``, ``envs.py`` batches env copies into rows, ``model.py`` is the
 actor-critic, ``trainer.py`` the loop, ``checkpoint.py`` the state dict + JSON format and the playing
-policy the registry loads as ``checkpoint:PATH``, ``evaluate.py`` greedy evaluation.
+policy the registry loads as ``checkpoint:PATH``, ``evaluate.py`` greedy evaluation (alone or against an
+opponent policy).
 """
 from .checkpoint import CheckpointPolicy, load_checkpoint_policy, load_model, save_checkpoint
 from .config import TrainConfig, load_train_config, validate_train_config
-from .evaluate import EvalResult, evaluate
+from .evaluate import EvalResult, evaluate, evaluate_against
 from .trainer import TrainResult, train
 
-__all__ = ["CheckpointPolicy", "EvalResult", "TrainConfig", "TrainResult", "evaluate", "load_checkpoint_policy",
-           "load_model", "load_train_config", "save_checkpoint", "train", "validate_train_config"]
+__all__ = ["CheckpointPolicy", "EvalResult", "TrainConfig", "TrainResult", "evaluate", "evaluate_against",
+           "load_checkpoint_policy", "load_model", "load_train_config", "save_checkpoint", "train", "validate_train_config"]

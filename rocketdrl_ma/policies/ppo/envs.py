@@ -8,7 +8,7 @@ episodes (return, length, success) and the final observation of every row whose 
 ``autoreset`` (the default) a copy that ends is reset at once and its rows carry the next episode's first
 observation, without it the rows keep their final observation until ``reset_copies`` (what a torchrl env's
 partial reset needs, ``rollout.py``). With ``shaping`` weights the pool also returns the potential-based
-shaping term of each row (``shaping.py``); with a ``teacher`` (a scripted bot's name), ``teacher_actions``
+shaping term of each row (``shaping.py``); with a ``teacher`` (a scripted bot or a policy spec), ``teacher_actions``
 labels every row's current state with the bot's action (kickstarting, ``policies/ppo/selfplay/kickstart.py``).
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ from gymnasium import spaces
 
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.env.vector_env import VectorEnv
-from rocketdrl_ma.policies.scripted import make_scripted
+from rocketdrl_ma.policies.registry import load_teacher
 
 from .shaping import make_shaping
 
@@ -75,7 +75,7 @@ class EnvPool:
         self.shaping = [make_shaping(shaping) for _ in self.envs] if shaping else []
         self.autoreset = autoreset
         # one teacher per copy: a bot may remember the game it is playing
-        self.teachers = [make_scripted(teacher) for _ in self.envs] if teacher else []
+        self.teachers = [load_teacher(teacher) for _ in self.envs] if teacher else []
 
     def _rows(self, i: int) -> slice:
         return slice(i * len(self.agents), (i + 1) * len(self.agents))

@@ -1,14 +1,21 @@
-"""Greedy evaluation of a checkpoint on the env config it was trained on."""
+"""Greedy evaluation of a checkpoint on the env config it was trained on, alone or against an opponent policy."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import torch
 
-from .checkpoint import load_model
+from rocketdrl_ma.env.vector_env import VectorEnv
+from rocketdrl_ma.policies.base import Policy
+from rocketdrl_ma.policies.registry import load_policy
+
+from .checkpoint import ModelPolicy, load_model
 from .envs import EnvPool
+
+TEAMS = ("blue", "orange")
 
 
 @dataclass
@@ -44,3 +51,79 @@ def evaluate(checkpoint: str | Path, episodes: int, seed: int = 10_000, n_envs: 
     return EvalResult(len(finished), float(np.mean([e.success for e in finished])),
                       float(np.mean([e.agent_return for e in finished])),
                       float(np.mean([e.length for e in finished])))
+
+
+def evaluate_against(checkpoint: str | Path, opponent: str, episodes: int, seed: int = 10_000, n_envs: int = 4,
+                     side: str | None = None, overrides: dict | None = None) -> EvalResult:
+    """Greedy episodes of the checkpoint's env with the checkpoint on ``side`` and ``opponent`` (a policy spec,
+    ``scripted:goalie`` or ``checkpoint:PATH``) on the other team; success is the checkpoint's team winning (the
+    shooter's goal, the keeper's save). ``side`` defaults to the team the checkpoint trained on
+    (``selfplay.side``), else blue. The episodes are those ``evaluate`` plays with the same seed and ``n_envs``."""
+    if episodes < 1:
+        raise ValueError(f"episodes: must be >= 1, got {episodes}")
+    torch.set_num_threads(1)
+    model, meta = load_model(checkpoint)
+    trained_side = (meta["train"].get("selfplay") or {}).get("side")
+    side = side or (trained_side if trained_side in TEAMS else "blue")
+    env_meta = meta["env"]
+    return play_against(env_meta["config"], {**env_meta["overrides"], **(overrides or {})}, side,
+                        lambda: ModelPolicy(model, env_meta["resolved"], f"checkpoint:{checkpoint}"),
+                        lambda: load_policy(opponent), episodes, seed, n_envs)
+
+
+def play_against(config: str | dict, overrides: dict, side: str, player: Callable[[], Policy],
+                 opponent: Callable[[], Policy], episodes: int, seed: int = 10_000, n_envs: int = 4) -> EvalResult:
+    """Episodes of a two-team game with ``player()`` driving every car of ``side`` and ``opponent()`` the others
+    (one instance per car); success is ``side`` winning, the return that of ``side``'s cars.
+
+    Every car is a ``Policy`` acting through its own observation builder and action parser, as in a league match,
+    and the env takes their controls through the lossless ``continuous`` parser, so a policy trained with other
+    sensors or actions (the seed's) plays as it learned. Each of the ``n_envs`` copies (seeded ``seed + i``) plays
+    a fixed quota of its first episodes, so short episodes are not favoured."""
+    if side not in TEAMS:
+        raise ValueError(f"side: expected one of {list(TEAMS)}, got {side!r}")
+    if episodes < 1:
+        raise ValueError(f"episodes: must be >= 1, got {episodes}")
+    vec = VectorEnv(config, n_arenas=n_envs, autoreset=False,
+                    **{**overrides, "action": "continuous", "info_format": "full"})
+    try:
+        mine = [a for a in vec.possible_agents if a.startswith(side)]
+        theirs = [a for a in vec.possible_agents if a not in mine]
+        if not theirs:
+            raise ValueError(f"opponent: {config} has no team but {side}'s ({vec.possible_agents}): "
+                             "nobody for the opponent to play")
+        players: list[dict[str, Policy]] = [{**{a: player() for a in mine}, **{a: opponent() for a in theirs}}
+                                            for _ in range(n_envs)]
+        quota = [episodes // n_envs + (copy < episodes % n_envs) for copy in range(n_envs)]
+        finished: list[tuple[bool, float, int]] = []
+        vec.reset(seed=seed)
+        _begin(vec, players, range(n_envs))
+        returns, lengths = np.zeros(n_envs), np.zeros(n_envs, np.int64)
+        columns = [vec.possible_agents.index(a) for a in mine]
+        while any(quota):
+            actions = np.stack([[lane.action_parser.encode(players[k][a].controls(a, lane.game_state))
+                                 for a in vec.possible_agents] for k, lane in enumerate(vec.lanes)])
+            _, rewards, terminated, truncated, infos = vec.step(actions)
+            returns += rewards[:, columns].mean(axis=1)
+            lengths += 1
+            ended = terminated | truncated
+            for k in np.flatnonzero(ended):
+                if quota[k]:
+                    quota[k] -= 1
+                    winner = infos[k][mine[0]].get("summary", {}).get("winner")
+                    finished.append((winner == side, float(returns[k]), int(lengths[k])))
+            if ended.any():
+                vec.reset_arenas(ended)
+                _begin(vec, players, np.flatnonzero(ended))
+                returns[ended], lengths[ended] = 0.0, 0
+    finally:
+        vec.close()
+    success, ret, length = (np.array(column, float) for column in zip(*finished))
+    return EvalResult(len(finished), float(success.mean()), float(ret.mean()), float(length.mean()))
+
+
+def _begin(vec: VectorEnv, players: list[dict[str, Policy]], copies) -> None:
+    for k in copies:
+        state = vec.lanes[int(k)].game_state
+        for policy in players[int(k)].values():
+            policy.reset(state)

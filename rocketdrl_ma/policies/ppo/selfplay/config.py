@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rocketdrl_ma.policies.scripted import check_bot
+from rocketdrl_ma.config import resolve_shipped_path
+from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS, check_bot
 from rocketdrl_ma.validation import check_choice, check_int, check_number, section_values
 
 from .pfsp import WEIGHTINGS
@@ -14,14 +15,33 @@ from .pfsp import WEIGHTINGS
 SIDES = ("alternate", "blue", "orange")
 
 
+def check_teacher(field: str, name: object) -> str:
+    """``name`` if ``policies.registry.load_teacher`` can load it: a scripted bot's name (bare or ``scripted:NAME``)
+    or ``checkpoint:PATH`` of a file with its JSON beside it (looked up now, so a wrong path fails at config load,
+    not in a rollout worker); else a ValueError naming ``field`` and what is allowed."""
+    kind, sep, argument = name.partition(":") if isinstance(name, str) else ("", "", "")
+    if isinstance(name, str) and not sep:
+        kind, argument = "scripted", name
+    if kind == "scripted" and argument in SCRIPTED_BOTS:
+        return name
+    if kind == "checkpoint":
+        path = resolve_shipped_path(argument, field)
+        if not path.with_name(path.name.removesuffix(".pt") + ".json").is_file():
+            raise ValueError(f"{field}: checkpoint {str(path)!r} has no JSON of its config beside it")
+        return name
+    raise ValueError(f"{field}: {name!r} is not one of the scripted bots {sorted(SCRIPTED_BOTS)} (bare or "
+                     "'scripted:NAME') nor 'checkpoint:PATH'")
+
+
 @dataclass(frozen=True)
 class ImitateConfig:
     """A warm start: clone a scripted bot before the first PPO update, then refine the clone by DAgger rounds."""
 
     bot: str = "ball_chaser"
-    """the scripted bot to clone"""
+    """the teacher to clone: a scripted bot's name, or a policy spec (``checkpoint:PATH``: a trained policy
+    labels through its own sensors and actions)"""
     opponent: str = "ball_chaser"
-    """the scripted bot it plays against while it is recorded (a game with one team has none)"""
+    """the bot (or policy spec) it plays against while it is recorded (a game with one team has none)"""
     decisions: int = 30_000
     """env decisions recorded for the first fit"""
     epochs: int = 20
@@ -40,7 +60,7 @@ def check_imitate(section: object, name: str = "selfplay.imitate") -> ImitateCon
     if not section:
         return None
     for key in ("bot", "opponent"):
-        check_bot(f"{name}.{key}", values[key])
+        check_teacher(f"{name}.{key}", values[key])
     for key in ("decisions", "epochs", "dagger_decisions"):
         check_int(f"{name}.{key}", values[key], minimum=1)
     check_int(f"{name}.dagger_rounds", values["dagger_rounds"], minimum=0)
@@ -52,7 +72,7 @@ class KickstartConfig:
     """A scripted teacher whose actions on the learner's own states add a fading distillation term to PPO's loss."""
 
     bot: str = "ball_chaser"
-    """the scripted teacher"""
+    """the teacher: a scripted bot's name, or a policy spec (``checkpoint:PATH``)"""
     weight: float = 1.0
     """the distillation term's weight at agent step 0"""
     decay_steps: int | None = 5_000_000
@@ -65,7 +85,7 @@ def check_kickstart(section: object, name: str = "selfplay.kickstart") -> Kickst
     values = section_values(name, section, KickstartConfig)
     if not section:
         return None
-    check_bot(f"{name}.bot", values["bot"])
+    check_teacher(f"{name}.bot", values["bot"])
     values["weight"] = check_number(f"{name}.weight", values["weight"], above=0.0)
     if values["decay_steps"] is not None:
         check_int(f"{name}.decay_steps", values["decay_steps"], minimum=1)

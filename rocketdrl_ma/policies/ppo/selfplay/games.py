@@ -19,6 +19,7 @@ from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.ppo.config import TrainConfig
 from rocketdrl_ma.policies.ppo.envs import Episode, StepResult
 from rocketdrl_ma.policies.ppo.shaping import make_shaping
+from rocketdrl_ma.policies.registry import load_teacher
 from rocketdrl_ma.policies.scripted import make_scripted
 from rocketdrl_ma.rules.events import Goal
 from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS, team_log_vector
@@ -62,7 +63,7 @@ class SelfPlayGames:
         # one bot object per copy and name: a bot may remember the game it is playing
         self.scripted = [[make_scripted(bot) for bot in self.sp.scripted] for _ in self.envs]
         kickstart = self.sp.kickstart
-        self.teachers = [make_scripted(kickstart.bot) for _ in self.envs] if kickstart else []
+        self.teachers = [load_teacher(kickstart.bot) for _ in self.envs] if kickstart else []
         self.learner_team = ["blue"] * len(self.envs)
         self.opponent = [SELF] * len(self.envs)
         self.generation = [0] * len(self.envs)

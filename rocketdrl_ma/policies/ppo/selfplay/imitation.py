@@ -23,7 +23,7 @@ import torch
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.policies.ppo.config import TrainConfig
 from rocketdrl_ma.policies.ppo.model import PPOModel
-from rocketdrl_ma.policies.scripted import make_scripted
+from rocketdrl_ma.policies.registry import load_teacher
 
 from .config import ImitateConfig
 
@@ -39,7 +39,7 @@ def collect(config: str, overrides: dict, bot: str, opponent: str, decisions: in
     decision, and the bot's action is recorded as the label of every state. A game with one team (a
     minigame's shooter) has no sides: the bot plays, and is recorded for, every car of every episode."""
     env = RocketDRLParallelEnv(config, **overrides)
-    player, other = make_scripted(bot), make_scripted(opponent)
+    player, other = load_teacher(bot), load_teacher(opponent)
     rng = np.random.default_rng(seed)
     one_team = len({agent.rpartition("_")[0] for agent in env.possible_agents}) == 1
     sides = ("blue", "orange") if side == "alternate" else (side,)
