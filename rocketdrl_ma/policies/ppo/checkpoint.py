@@ -38,7 +38,8 @@ def checkpoint_meta(cfg: TrainConfig, model: PPOModel, obs_dim: int, agent_steps
     """The JSON beside a checkpoint: the network's shape, the env it plays, the training config (its plain form,
     ``TrainConfig.to_mapping``), its step count."""
     net = {"obs_dim": obs_dim, "action": model.action, "hidden_units": cfg.hidden_units,
-           "num_layers": cfg.num_layers, "normalize": cfg.normalize, "features": model.features}
+           "num_layers": cfg.num_layers, "normalize": cfg.normalize, "features": model.features,
+           "critic": cfg.critic, "critic_inputs": model.critic_inputs}
     env = {"config": cfg.env, "overrides": cfg.env_overrides, "resolved": load_config(cfg.env, cfg.env_overrides)}
     return {"agent_steps": agent_steps, "network": net, "env": env, "train": cfg.to_mapping(), "metrics": metrics,
             "difficulty": difficulty}
@@ -78,7 +79,8 @@ def load_model(path: str | Path) -> tuple[PPOModel, dict[str, Any]]:
     meta = read_meta(p)
     net = meta["network"]
     model = PPOModel(net["obs_dim"], net["action"], net["hidden_units"], net["num_layers"], net["normalize"],
-                     features=net.get("features", "none"))  # checkpoints from before features: none
+                     # checkpoints from before features and the central critic: none, local
+                     features=net.get("features", "none"), critic_inputs=net.get("critic_inputs", 1))
     model.load_state_dict(torch.load(p, map_location="cpu", weights_only=True))
     model.eval()
     return model, meta

@@ -23,6 +23,7 @@ from rocketdrl_ma.validation import (check_bool, check_choice, check_int, check_
 from rocketdrl_ma.policies.ppo.selfplay.config import (ImitateConfig, KickstartConfig, SelfPlayConfig, check_imitate,
                                                         check_kickstart, check_selfplay)
 
+from .critic import CRITICS
 from .features import FEATURES
 from .shaping import check_shaping
 
@@ -103,6 +104,10 @@ class TrainConfig:
     features: str = "none"
     """fixed inputs the model computes from the observation (``features.py``): ``none``, or ``car_local`` (ball
     and other cars in the car's own frame; needs the ``team_relative`` observation)"""
+    critic: str = "local"
+    """what the value network reads (``critic.py``): ``local``, the car's own observation (independent PPO), or
+    ``central``, its whole team's observations, its own first (MAPPO's centralised critic); the actor acts on the
+    car's own observation either way, so a checkpoint plays the same"""
     curriculum: CurriculumConfig | None = None
     """raise a minigame's difficulty as the learner succeeds; null: the env config's difficulty throughout"""
     selfplay: SelfPlayConfig | None = None
@@ -173,6 +178,7 @@ def validate_train_config(raw: Mapping[str, Any]) -> TrainConfig:
     check_choice("learning_rate_schedule", values["learning_rate_schedule"], SCHEDULES)
     check_choice("device", values["device"], DEVICES)
     check_choice("features", values["features"], FEATURES)
+    check_choice("critic", values["critic"], CRITICS)
     check_bool("normalize", values["normalize"])
     if values["n_workers"] is not None:  # 0: no worker processes; null: one per core
         check_int("n_workers", values["n_workers"], minimum=0)

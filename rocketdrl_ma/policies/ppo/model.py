@@ -88,7 +88,8 @@ class GaussianHead(nn.Module):
 
 class PPOModel(nn.Module):
     def __init__(self, obs_dim: int, action: dict, hidden_units: int, num_layers: int, normalize: bool,
-                 init_std: float = 1.0, init_action: np.ndarray | None = None, features: str = "none"):
+                 init_std: float = 1.0, init_action: np.ndarray | None = None, features: str = "none",
+                 critic_inputs: int = 1):
         super().__init__()
         self.action = action
         feature_module, in_dim = make_features(features, obs_dim)
@@ -103,10 +104,15 @@ class PPOModel(nn.Module):
             self.policy: nn.Module = GaussianHead(body, action["dim"], init_std)
         else:
             self.policy = mlp(in_dim, action["n"], hidden_units, num_layers, 0.01)
-        self.value = mlp(in_dim, 1, hidden_units, num_layers, 1.0)
+        # the value reads ``critic_inputs`` model inputs side by side: 1, the car's own (``critic: local``), or its
+        # team's, its own first (``central``, MAPPO; critic.py), given to ClipPPOLoss as "critic_observation"
+        self.critic_inputs = critic_inputs
+        self.critic_key = "observation" if critic_inputs == 1 else "critic_observation"
+        self.value = mlp(in_dim * critic_inputs, 1, hidden_units, num_layers, 1.0)
 
     def td_modules(self) -> tuple[ProbabilisticActor, ValueOperator]:
-        """torchrl views of the policy and the value over normalised ``"observation"`` (for ClipPPOLoss)."""
+        """torchrl views of the policy over normalised ``"observation"`` and of the value over ``critic_key``
+        (for ClipPPOLoss)."""
         if self.action["kind"] == "box":
             actor = ProbabilisticActor(
                 TensorDictModule(self.policy, in_keys=["observation"], out_keys=["loc", "scale"]),
@@ -117,7 +123,7 @@ class PPOModel(nn.Module):
                 TensorDictModule(self.policy, in_keys=["observation"], out_keys=["logits"]),
                 in_keys=["logits"], out_keys=["action"], distribution_class=torch.distributions.Categorical,
                 return_log_prob=True)
-        return actor, ValueOperator(self.value, in_keys=["observation"])
+        return actor, ValueOperator(self.value, in_keys=[self.critic_key])
 
     @torch.no_grad()
     def act_deterministic(self, obs: np.ndarray) -> np.ndarray:

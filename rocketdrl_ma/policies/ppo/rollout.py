@@ -63,10 +63,12 @@ class RolloutEnv(EnvBase):
             from rocketdrl_ma.policies.ppo.selfplay.games import SelfPlayGames
             self.games = SelfPlayGames(cfg, copies, first_copy)
             self.copy_rows = self.games.team_size
+            self.copy_teams = ["learner"] * self.copy_rows  # a copy's rows: the learner's team
         else:
             self.games = EnvPool(cfg.env, copies, cfg.seed + first_copy, cfg.env_overrides, cfg.shaping,
                                  autoreset=False, teacher=kickstart.bot if kickstart else None)
             self.copy_rows = len(self.games.agents)
+            self.copy_teams = [agent.rpartition("_")[0] for agent in self.games.agents]  # a copy's rows: every car
         self.copies, self.rows = copies, self.games.n_rows
         super().__init__(batch_size=torch.Size([self.rows]), device="cpu")
         self.rng = np.random.default_rng([cfg.seed, worker])

@@ -33,6 +33,7 @@ from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS
 
 from .checkpoint import ModelPolicy, checkpoint_meta, read_meta, resolve_checkpoint, save_checkpoint, sidecar
 from .config import TrainConfig
+from .critic import CRITICS, critic_input, team_order
 from .envs import Episode
 from .model import PPOModel, action_spec
 from .rollout import RolloutEnv
@@ -102,6 +103,7 @@ class Probe:
     action: dict
     rows_per_copy: int
     idle: np.ndarray | None  # the idle car's controls as a Box action (the Gaussian's initial mean)
+    row_teams: list[str]     # the team of each row of an env copy (the central critic reads a row's team)
 
     @classmethod
     def of(cls, cfg: TrainConfig) -> "Probe":
@@ -110,7 +112,7 @@ class Probe:
             action = action_spec(env.action_space)
             parser = env.games.envs[0].action_parser
             idle = parser.encode(CarControls()) if action["kind"] == "box" else None
-            return cls(env.observation_space.shape[0], action, env.copy_rows, idle)
+            return cls(env.observation_space.shape[0], action, env.copy_rows, idle, env.copy_teams)
         finally:
             env.close()
 
@@ -129,8 +131,9 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     plan = workers or worker_plan(cfg)
     wcfg = worker_config(cfg)
     probe = Probe.of(wcfg)
+    critic_order = torch.as_tensor(team_order(probe.row_teams, cfg.critic))
     model = PPOModel(probe.obs_dim, probe.action, cfg.hidden_units, cfg.num_layers, cfg.normalize,
-                     cfg.init_std, probe.idle, cfg.features).to(device)
+                     cfg.init_std, probe.idle, cfg.features, critic_order.shape[1]).to(device)
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate, eps=1e-5)
     agent_steps = 0
     curriculum = cfg.curriculum
@@ -138,6 +141,10 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     if resume is not None:
         path = resolve_checkpoint(resume)
         meta = read_meta(path)
+        trained_with = meta["network"].get("critic", "local")
+        if trained_with != cfg.critic:
+            raise ValueError(f"critic: {path} was trained with critic: {trained_with}; resume it with the same "
+                             f"(allowed: {list(CRITICS)}), got {cfg.critic!r}")
         model.load_state_dict(torch.load(path, map_location=device, weights_only=True))
         if sidecar(path, ".optim.pt").is_file():
             optimizer.load_state_dict(torch.load(sidecar(path, ".optim.pt"), map_location=device, weights_only=True))
@@ -149,6 +156,10 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
         opponents.attach(model, agent_steps)
     elif agent_steps == 0 and cfg.imitate:  # a fresh run with a teacher: start from its clone
         warm_start(model, cfg, log=print, spec=cfg.imitate)
+    if agent_steps == 0 and cfg.teacher_imitate is not None:
+        # the clone before any PPO update, so an evaluation can tell what PPO added to it
+        save_checkpoint(run_dir / "warm_start.pt", model,
+                        checkpoint_meta(cfg, model, probe.obs_dim, 0, {"warm_start": True}))
     policy = RolloutPolicy(model, opponents.slot_models if opponents else None,
                            opponents.n_opponents if opponents else 0)
     rollouts = Rollouts(wcfg, policy, plan, probe.rows_per_copy)
@@ -204,7 +215,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             # ---- advantages, then num_epoch passes of minibatch updates
             lag = int(policy.version) - int(batch["policy_version"].min())
             lags.append(lag)
-            losses = learn(model, loss_module, optimizer, batch, cfg, kick_weight, frozen_norm)
+            losses = learn(model, loss_module, optimizer, batch, cfg, kick_weight, frozen_norm, critic_order)
             loss_history.append(losses)
             policy.version += 1
             if opponents is not None:
@@ -323,16 +334,25 @@ class MatchTally:
 
 
 def learn(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim.Optimizer, batch: TensorDict,
-          cfg: TrainConfig, kick_weight: float, frozen_norm: bool) -> dict[str, float]:
-    """GAE over the batch ``[rows, T]`` and ``num_epoch`` passes of PPO minibatches; the last pass's losses."""
+          cfg: TrainConfig, kick_weight: float, frozen_norm: bool,
+          critic_order: torch.Tensor | None = None) -> dict[str, float]:
+    """GAE over the batch ``[rows, T]`` and ``num_epoch`` passes of PPO minibatches; the last pass's losses.
+    ``critic_order`` ([rows of an env copy, k], ``critic.team_order``): the rows whose inputs the value reads
+    (default: each row its own)."""
     rows, horizon = batch.shape
     obs = batch.get("observation")
     nxt = batch.get("next")
     flat_obs = obs.reshape(rows * horizon, -1)
+    order = critic_order if critic_order is not None else torch.zeros((1, 1), dtype=torch.int64)
+
+    def critic_view(x: torch.Tensor) -> torch.Tensor:  # [rows * T, D] -> [rows * T, k * D]
+        return critic_input(x.reshape(rows, horizon, -1), order).reshape(rows * horizon, -1)
+
     with torch.no_grad():
         x = model.obs_norm(flat_obs)  # the statistics the workers acted with
-        value = model.value(x).reshape(rows, horizon, 1)
-        next_value = model.value(model.obs_norm(nxt.get("observation").reshape(rows * horizon, -1)))
+        critic_x = critic_view(x)
+        value = model.value(critic_x).reshape(rows, horizon, 1)
+        next_value = model.value(critic_view(model.obs_norm(nxt.get("observation").reshape(rows * horizon, -1))))
         next_value = next_value.reshape(rows, horizon, 1)
     reward = nxt.get("reward") * cfg.strength + nxt.get("shaping").unsqueeze(-1)
     cut = torch.zeros((rows, horizon, 1), dtype=torch.bool)
@@ -343,7 +363,7 @@ def learn(model: PPOModel, loss_module: ClipPPOLoss, optimizer: torch.optim.Opti
     if not frozen_norm:
         model.obs_norm.update(flat_obs)
     action = batch.get("action")
-    flat = TensorDict({"observation": x,
+    flat = TensorDict({"observation": x, model.critic_key: critic_x,
                        "action": action.reshape(rows * horizon, *action.shape[2:]),
                        "action_log_prob": batch.get("action_log_prob").reshape(-1),
                        "advantage": advantage.reshape(-1, 1), "value_target": value_target.reshape(-1, 1)},
