@@ -163,7 +163,7 @@ def test_a_vector_env_copies_with_every_arena(how):
 # lone envs' seeds seed + k.
 @pytest.mark.parametrize("num_cpus,n_copies", [(0, 3), (2, 2)])
 def test_supersuit_concat_vec_envs_of_a_reset_env_equals_lone_envs(num_cpus, n_copies):
-    ss = pytest.importorskip("supersuit")
+    import supersuit as ss  # the test extra installs it: a missing SuperSuit is a failure, not a skip
     config = dict(config="matches/2v2.yaml", max_cycles=40)  # episodes end inside the test: autoreset too
     template = rocketdrl_ma.parallel_env(**config)
     template.reset(seed=123)
