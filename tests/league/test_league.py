@@ -66,9 +66,9 @@ def test_schedule_is_deterministic_with_unique_keys(tmp_path):
 def test_ratings_order_the_stronger_bot_first_and_team_matches_rate_members(tmp_path):
     # the flip-chaser, not the ball-chaser: the ball-chaser's way back through the ball scores own goals even
     # against an idle car (on seed 4 it lost two of four 2-minute matches to one)
-    base = league(tmp_path, "strength", 120.0)
-    base["entrants"][0]["policy"] = "scripted:flip_chaser"
-    cfg = validate_league_config({**base, "format": "per_pair", "matches_per_pair": 4, "seed": 4})
+    cfg = validate_league_config(league(tmp_path, "strength", 120.0, format="per_pair", matches_per_pair=4, seed=4,
+                                        entrants=[{"name": "chaser", "policy": "scripted:flip_chaser"},
+                                                  {"name": "idle", "policy": "scripted:idle"}]))
     run = run_league(cfg)
     assert (run.scheduled, run.already_stored, run.played) == (4, 0, 4)
     with ResultsStore(cfg.results) as store:
