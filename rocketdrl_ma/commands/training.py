@@ -45,6 +45,7 @@ def _run_eval(args: argparse.Namespace) -> int:
     against = "" if args.opponent is None else f" against {args.opponent}"
     print(f"{args.checkpoint}{against}: success {r.success_rate:.1%} over {r.episodes} episodes, "
           f"mean return {r.mean_return:+.2f}, mean length {r.mean_length:.1f} decisions")
+    print(f"outcomes: {r.outcomes_text()}")
     return 0
 
 

@@ -36,6 +36,7 @@ def test_the_keeper_saves_every_shot_of_an_idle_shooter_and_the_side_decides_who
     saves = evaluate_against(keeper, "scripted:idle", episodes=2, n_envs=2)  # its side: orange, from training
     assert (saves.episodes, saves.success_rate) == (2, 1.0)  # the timeout is a miss: the keeper's win
     assert saves.mean_return > 0.0  # the keeper's reward: the negated -0.01 per decision and the +10 of the miss
+    assert saves.outcomes == {"timeout": 2}
     shots = evaluate_against(keeper, "scripted:idle", episodes=2, n_envs=2, side="blue")
     assert shots.success_rate == 0.0  # the same network shooting from blue, against an idle keeper: no goal
 
@@ -73,5 +74,6 @@ def test_the_eval_command_takes_an_opponent(keeper, capsys):
     assert main(["eval", str(keeper), "--opponent", "scripted:idle", "--episodes", "2", "--n-envs", "2"]) == 0
     out = capsys.readouterr().out
     assert "against scripted:idle: success 100.0% over 2 episodes" in out
+    assert "outcomes: timeout 2" in out
     with pytest.raises(ValueError, match="--side"):
         main(["eval", str(keeper), "--side", "blue", "--episodes", "1"])

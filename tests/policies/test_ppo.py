@@ -17,8 +17,8 @@ import rocketdrl_ma
 from rocketdrl_ma.cli import main
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.policies.ppo import load_model, train, validate_train_config
-from rocketdrl_ma.policies.ppo.envs import EnvPool
-from rocketdrl_ma.policies.ppo.evaluate import evaluate
+from rocketdrl_ma.policies.ppo.envs import EnvPool, episode_outcomes
+from rocketdrl_ma.policies.ppo.evaluate import count_outcomes, evaluate
 from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.rules.rewards import BallToGoalDistance, CarToBallDistance
 from rocketdrl_ma.policies.ppo.trainer import make_loss, ppo_update
@@ -110,6 +110,20 @@ def test_evaluation_takes_each_copys_first_episodes():
     assert result.episodes == 3
     assert result.mean_length == np.mean([e.length for e in expected])
     assert result.mean_return == pytest.approx(np.mean([e.agent_return for e in expected]))
+    # one round an episode: one outcome each, the same ones the lone copies played
+    assert result.outcomes == count_outcomes(e.outcomes for e in expected)
+    assert sum(result.outcomes.values()) == 3 and set(result.outcomes) <= {"goal", "wide", "timeout", "retreat"}
+
+
+def test_a_match_episode_ends_in_the_agents_teams_win_loss_or_draw_and_a_minigame_in_its_rounds():
+    """The shapes ``Rules.summary()`` gives: a match's ``winner``, a minigame's ``results`` (reason, else outcome)."""
+    assert episode_outcomes("orange_1", {"summary": {"winner": "orange"}}) == ("win",)
+    assert episode_outcomes("blue_0", {"summary": {"winner": "orange"}}) == ("loss",)
+    assert episode_outcomes("blue_0", {"summary": {"winner": None}}) == ("draw",)
+    rounds = [{"outcome": "goal", "reason": None}, {"outcome": "miss", "reason": "wide"}]
+    assert episode_outcomes("blue_0", {"summary": {"winner": None, "results": rounds}}) == ("goal", "wide")
+    assert episode_outcomes("blue_0", {}) == ("unfinished",)
+    assert count_outcomes([("goal", "wide"), ("wide",), ("timeout",)]) == {"wide": 2, "goal": 1, "timeout": 1}
 
 
 def test_update_lowers_the_loss_on_a_toy_batch():

@@ -33,6 +33,7 @@ class Episode:
     length: int
     success: bool
     copy: int  # the env copy that played it
+    outcomes: tuple[str, ...] = ()  # how it ended (``episode_outcomes``); empty where only the numbers travel
 
 
 def episode_success(agent: str, info: dict) -> bool:
@@ -43,6 +44,19 @@ def episode_success(agent: str, info: dict) -> bool:
     if "is_success" in info:
         return bool(info["is_success"])
     return summary.get("winner") == agent.rpartition("_")[0]
+
+
+def episode_outcomes(agent: str, info: dict) -> tuple[str, ...]:
+    """How an episode ended, for counting: a minigame's rounds in order, each ``goal`` or its miss reason
+    (``wide``, ``timeout``, ``ball_on_ground``...); a match's ``win``, ``loss`` or ``draw`` for ``agent``'s team;
+    ``unfinished`` when the final info has no summary (an episode cut off before its rules ended it)."""
+    summary = info.get("summary")
+    if not summary:
+        return ("unfinished",)
+    if "results" in summary:
+        return tuple(r["reason"] or r["outcome"] for r in summary["results"]) or ("unfinished",)
+    winner = summary.get("winner")
+    return ("draw",) if winner is None else ("win",) if winner == agent.rpartition("_")[0] else ("loss",)
 
 
 @dataclass
@@ -110,7 +124,8 @@ class EnvPool:
             for k, agent in enumerate(self.agents):
                 row = rows.start + k
                 episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
-                                        episode_success(agent, infos[i][agent]), int(i)))
+                                        episode_success(agent, infos[i][agent]), int(i),
+                                        episode_outcomes(agent, infos[i][agent])))
         if self.autoreset and ended.any():
             obs = self._reset_ended(obs, ended)
         done = terminated | truncated

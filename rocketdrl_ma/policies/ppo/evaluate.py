@@ -1,7 +1,8 @@
 """Greedy evaluation of a checkpoint on the env config it was trained on, alone or against an opponent policy."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections import Counter
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
@@ -13,7 +14,7 @@ from rocketdrl_ma.policies.base import Policy
 from rocketdrl_ma.policies.registry import load_policy
 
 from .checkpoint import ModelPolicy, load_model
-from .envs import EnvPool
+from .envs import EnvPool, episode_outcomes
 
 TEAMS = ("blue", "orange")
 
@@ -24,6 +25,19 @@ class EvalResult:
     success_rate: float
     mean_return: float
     mean_length: float
+    #: how the episodes ended, most frequent first: a minigame's rounds (``goal`` or the miss reason), a match's
+    #: ``win`` / ``draw`` / ``loss`` (the evaluated team's, against an opponent)
+    outcomes: dict[str, int] = field(default_factory=dict)
+
+    def outcomes_text(self) -> str:
+        """``goal 116, wide 39, timeout 27`` (empty without outcomes)."""
+        return ", ".join(f"{name} {count}" for name, count in self.outcomes.items())
+
+
+def count_outcomes(outcomes) -> dict[str, int]:
+    """Counts of an iterable of outcome tuples, most frequent first (ties by name)."""
+    counts = Counter(name for episode in outcomes for name in episode)
+    return dict(sorted(counts.items(), key=lambda item: (-item[1], item[0])))
 
 
 def evaluate(checkpoint: str | Path, episodes: int, seed: int = 10_000, n_envs: int = 4,
@@ -50,7 +64,7 @@ def evaluate(checkpoint: str | Path, episodes: int, seed: int = 10_000, n_envs: 
     pool.close()
     return EvalResult(len(finished), float(np.mean([e.success for e in finished])),
                       float(np.mean([e.agent_return for e in finished])),
-                      float(np.mean([e.length for e in finished])))
+                      float(np.mean([e.length for e in finished])), count_outcomes(e.outcomes for e in finished))
 
 
 def evaluate_against(checkpoint: str | Path, opponent: str, episodes: int, seed: int = 10_000, n_envs: int = 4,
@@ -96,6 +110,7 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
                                             for _ in range(n_envs)]
         quota = [episodes // n_envs + (copy < episodes % n_envs) for copy in range(n_envs)]
         finished: list[tuple[bool, float, int]] = []
+        outcomes: list[tuple[str, ...]] = []
         vec.reset(seed=seed)
         _begin(vec, players, range(n_envs))
         returns, lengths = np.zeros(n_envs), np.zeros(n_envs, np.int64)
@@ -112,6 +127,7 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
                     quota[k] -= 1
                     winner = infos[k][mine[0]].get("summary", {}).get("winner")
                     finished.append((winner == side, float(returns[k]), int(lengths[k])))
+                    outcomes.append(episode_outcomes(mine[0], infos[k][mine[0]]))
             if ended.any():
                 vec.reset_arenas(ended)
                 _begin(vec, players, np.flatnonzero(ended))
@@ -119,7 +135,8 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
     finally:
         vec.close()
     success, ret, length = (np.array(column, float) for column in zip(*finished))
-    return EvalResult(len(finished), float(success.mean()), float(ret.mean()), float(length.mean()))
+    return EvalResult(len(finished), float(success.mean()), float(ret.mean()), float(length.mean()),
+                      count_outcomes(outcomes))
 
 
 def _begin(vec: VectorEnv, players: list[dict[str, Policy]], copies) -> None:
