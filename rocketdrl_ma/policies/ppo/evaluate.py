@@ -4,7 +4,7 @@ from __future__ import annotations
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterable
 
 import numpy as np
 import torch
@@ -34,7 +34,7 @@ class EvalResult:
         return ", ".join(f"{name} {count}" for name, count in self.outcomes.items())
 
 
-def count_outcomes(outcomes) -> dict[str, int]:
+def count_outcomes(outcomes: Iterable[tuple[str, ...]]) -> dict[str, int]:
     """Counts of an iterable of outcome tuples, most frequent first (ties by name)."""
     counts = Counter(name for episode in outcomes for name in episode)
     return dict(sorted(counts.items(), key=lambda item: (-item[1], item[0])))
