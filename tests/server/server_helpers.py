@@ -10,6 +10,8 @@ import threading
 import time
 from pathlib import Path
 
+import zenoh
+
 from rocketdrl_ma.server.client import LobbyClient, SealedStream
 from rocketdrl_ma.server.lobby import MatchServer
 from rocketdrl_ma.server.settings import ClientSettings, ServerSettings, ZenohSettings
@@ -206,8 +208,10 @@ class RawBot:
     def send(self, action, decision: int, secret: bytes | None = None, key: str | None = None,
              slot: str | None = None) -> None:
         from rocketdrl_ma.server.protocol import action_message
+        # BLOCK: a test's action must reach the server (the put default, DROP, may lose it on a busy machine)
         self.session.put(key or self.join.keys["act"], action_message(
-            secret or self.join.secret, self.join.match, slot or self.join.slot, decision, action))
+            secret or self.join.secret, self.join.match, slot or self.join.slot, decision, action),
+            congestion_control=zenoh.CongestionControl.BLOCK)
 
     def disconnect(self) -> None:
         self._token.undeclare()

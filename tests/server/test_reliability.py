@@ -12,6 +12,7 @@ import msgpack
 import numpy as np
 import psutil
 import pytest
+import zenoh
 from server_helpers import SHORT, RawBot, wait_for
 
 from rocketdrl_ma.results import ResultsStore
@@ -82,7 +83,12 @@ def test_malformed_payloads_are_dropped_and_counted(running, procs):
     procs.bot(running, "m", "blue_0")
     orange = RawBot(running.session, running.lobby, "m", "orange_0", answer=lambda m: NEUTRAL)
     wait_for(lambda: len(orange.messages) > 5, 60, "the match to run")
-    key, secret, put = orange.join.keys["act"], orange.join.secret, running.session.put
+    key, secret = orange.join.keys["act"], orange.join.secret
+
+    def put(k: str, payload: bytes) -> None:
+        # BLOCK: every hostile message must reach the server (a put's default, DROP, may lose one on a busy machine)
+        running.session.put(k, payload, congestion_control=zenoh.CongestionControl.BLOCK)
+
     decision = lambda: orange.messages[-1]["decision"]  # noqa: E731
     put(key, np.random.default_rng(0).bytes(200))                                             # malformed
     put(key, msgpack.packb([1, 2, 3]))                                                        # malformed
@@ -104,8 +110,9 @@ def test_malformed_payloads_are_dropped_and_counted(running, procs):
     wait_for(lambda: len(orange.errors) == 5, 10, "signed error messages to the slot's bot")
     assert sum(e.startswith("action for orange_0") for e in orange.errors) == 3, orange.errors
     info = running.wait_status("m", timeout_s=120)
-    rejected = info["rejected"]
-    assert rejected == expected
+    # Besides the hostile messages the server may count its own NEUTRAL answers as ``late`` on a loaded machine
+    rejected = {k: v for k, v in info["rejected"].items() if k != "late"}
+    assert rejected == expected, sorted(info["rejected"].items())
     assert info["slot_status"]["orange_0"]["invalid"] == 5
     assert info["slot_status"]["orange_0"]["received"] >= 0.9 * info["decision"]
     # no state was corrupted: every published state is finite and the match ended normally with a result
