@@ -70,7 +70,9 @@ def _run_duel(args: argparse.Namespace) -> int:
         raise ValueError(f"configs: two learners need two differently named YAMLs, got {args.configs}")
     plan = worker_plan(next(iter(learners.values())), args.workers)
     for phase in duel(learners, args.root, args.cycles, args.phase_steps, plan, progress=not args.quiet):
-        print(f"cycle {phase.cycle}  {phase.learner:<24} {phase.agent_steps:>10,d} agent steps  {phase.checkpoint}")
+        stopped = "  (stopped: the duel ends here; run the command again to go on)" if phase.stopped else ""
+        print(f"cycle {phase.cycle}  {phase.learner:<24} {phase.agent_steps:>10,d} agent steps  {phase.checkpoint}"
+              f"{stopped}")
     return 0
 
 

@@ -24,6 +24,7 @@ class Phase:
     learner: str       # the learner's name (its run directory under the duel's root)
     agent_steps: int   # that learner's agent steps after the phase
     checkpoint: Path
+    stopped: bool = False  # a Ctrl-C or SIGTERM ended the phase early, and with it the duel
 
 
 def check_learners(learners: dict[str, TrainConfig]) -> None:
@@ -44,7 +45,9 @@ def check_learners(learners: dict[str, TrainConfig]) -> None:
 def duel(learners: dict[str, TrainConfig], root: str | Path, cycles: int, phase_steps: int,
          workers: WorkerPlan | None = None, progress: bool = False) -> list[Phase]:
     """``cycles`` rounds of ``phase_steps`` agent steps for each learner, in the order given; learner ``name``
-    runs in ``root/name`` (TensorBoard logs, ``final.pt``, ``snapshots/``), which a later call resumes."""
+    runs in ``root/name`` (TensorBoard logs, ``final.pt``, ``snapshots/``), which a later call resumes. A Ctrl-C
+    or SIGTERM ends the phase it arrives in (its checkpoint written, as ``train`` does) and the duel with it: the
+    next learner's phase does not start."""
     check_learners(learners)
     if cycles < 1 or phase_steps < 1:
         raise ValueError(f"duel: cycles and phase_steps must be >= 1, got {cycles} and {phase_steps}")
@@ -61,5 +64,7 @@ def duel(learners: dict[str, TrainConfig], root: str | Path, cycles: int, phase_
                                 selfplay=replace(cfg.selfplay, opponent_runs=tuple(others)))
             result = train(phase_cfg, final, run_dir, resume=final if final.is_file() else None, progress=progress,
                            workers=workers)
-            phases.append(Phase(cycle, name, result.agent_steps, result.checkpoint))
+            phases.append(Phase(cycle, name, result.agent_steps, result.checkpoint, result.stopped))
+            if result.stopped:
+                return phases
     return phases

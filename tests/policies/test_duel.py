@@ -107,3 +107,40 @@ def test_one_alternation_trains_each_learner_against_the_others_snapshots(tmp_pa
                      features=meta["network"]["features"])
     with pytest.raises(ValueError, match="selfplay.opponent_runs: .* is not shaped like this learner's network"):
         OpponentPool(keeper, tmp_path / "k3", meta["network"]["obs_dim"]).attach(small, 512)
+
+
+def test_a_stop_request_ends_the_duel_with_the_phase_it_arrives_in(tmp_path, monkeypatch, capsys):
+    """Ctrl-C or SIGTERM in the shooter's phase: that phase writes its checkpoint and the keeper's never starts
+    (before, the runner went on to the next learner, so only killing the process stopped a duel)."""
+    import json
+
+    from rocketdrl_ma.policies.ppo import trainer
+
+    class StopAfterFirstIteration(trainer.StopRequest):
+        """The signal, arriving during the first iteration: ``requested`` turns true after the loop's first check."""
+
+        def __init__(self):
+            super().__init__()
+            self.checks = 0
+
+        @property
+        def requested(self):
+            self.checks += 1
+            return self.checks > 1
+
+        @requested.setter
+        def requested(self, value):
+            pass
+
+    monkeypatch.setattr(trainer, "StopRequest", StopAfterFirstIteration)
+    configs = []
+    for name in ("shooter", "keeper"):
+        path = tmp_path / f"{name}.yaml"
+        path.write_text(json.dumps({**_learner(name).to_mapping(), "env": "minigames/penalty_duel.yaml"}))
+        configs.append(str(path))
+    root = tmp_path / "duel"
+    assert main(["duel", *configs, "--cycles", "2", "--phase-steps", "1024", "--root", str(root), "--workers", "0",
+                 "--quiet"]) == 0
+    assert read_meta(root / "shooter" / "final.pt")["agent_steps"] == 128  # one iteration (buffer_size 128)
+    assert not (root / "keeper").exists()
+    assert "(stopped: the duel ends here" in capsys.readouterr().out

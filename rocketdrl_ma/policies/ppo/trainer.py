@@ -57,6 +57,8 @@ class TrainResult:
     #: that wall time
     steps_per_s: float = float("nan")
     learner_share: float = float("nan")
+    #: a Ctrl-C or SIGTERM ended the run before ``max_steps`` (its checkpoint is written all the same)
+    stopped: bool = False
 
 
 class StopRequest:
@@ -266,7 +268,8 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     metrics = {"train_success_rate": success, "train_mean_return": ret, **losses}
     meta = checkpoint_meta(cfg, model, probe.obs_dim, agent_steps, metrics, difficulty)
     path = save_checkpoint(out, model, meta, optimizer)
-    return TrainResult(path, agent_steps, history, loss_history, lags, *speed)
+    return TrainResult(path, agent_steps, history, loss_history, lags, *speed,
+                       stopped=stop.requested and agent_steps < cfg.max_steps)
 
 
 def sync_controls(policy: RolloutPolicy, difficulty: float | None, kickstart: bool,
