@@ -1,5 +1,7 @@
 """The penalty duel's two learners: a self-play learner on a fixed side, opponent slots filled from another run's
 snapshots, and one alternation of ``rocketdrl-ma duel`` at tiny size on the real env and trainer."""
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -65,16 +67,20 @@ def test_the_warm_start_of_a_fixed_side_learner_records_only_its_team():
 
 
 @pytest.mark.slow
-def test_one_alternation_trains_each_learner_against_the_others_snapshots(tmp_path):
-    """``rocketdrl-ma duel``: the shooter's phase meets only the scripted goalie (no keeper yet), the keeper's phase
-    has the shooter's two snapshots in its slots, and a second call resumes both learners."""
-    import json
-
+def _learner_yamls(tmp_path) -> list[str]:
+    """The two tiny learners as YAML files (the ``duel`` command reads files; JSON is YAML)."""
     configs = []
     for name in ("shooter", "keeper"):
         path = tmp_path / f"{name}.yaml"
         path.write_text(json.dumps({**_learner(name).to_mapping(), "env": "minigames/penalty_duel.yaml"}))
         configs.append(str(path))
+    return configs
+
+
+def test_one_alternation_trains_each_learner_against_the_others_snapshots(tmp_path):
+    """``rocketdrl-ma duel``: the shooter's phase meets only the scripted goalie (no keeper yet), the keeper's phase
+    has the shooter's two snapshots in its slots, and a second call resumes both learners."""
+    configs = _learner_yamls(tmp_path)
     root = tmp_path / "duel"
     args = ["duel", *configs, "--cycles", "1", "--phase-steps", "256", "--root", str(root), "--workers", "0",
             "--quiet"]
@@ -112,8 +118,6 @@ def test_one_alternation_trains_each_learner_against_the_others_snapshots(tmp_pa
 def test_a_stop_request_ends_the_duel_with_the_phase_it_arrives_in(tmp_path, monkeypatch, capsys):
     """Ctrl-C or SIGTERM in the shooter's phase: that phase writes its checkpoint and the keeper's never starts
     (before, the runner went on to the next learner, so only killing the process stopped a duel)."""
-    import json
-
     from rocketdrl_ma.policies.ppo import trainer
 
     class StopAfterFirstIteration(trainer.StopRequest):
@@ -133,11 +137,7 @@ def test_a_stop_request_ends_the_duel_with_the_phase_it_arrives_in(tmp_path, mon
             pass
 
     monkeypatch.setattr(trainer, "StopRequest", StopAfterFirstIteration)
-    configs = []
-    for name in ("shooter", "keeper"):
-        path = tmp_path / f"{name}.yaml"
-        path.write_text(json.dumps({**_learner(name).to_mapping(), "env": "minigames/penalty_duel.yaml"}))
-        configs.append(str(path))
+    configs = _learner_yamls(tmp_path)
     root = tmp_path / "duel"
     assert main(["duel", *configs, "--cycles", "2", "--phase-steps", "1024", "--root", str(root), "--workers", "0",
                  "--quiet"]) == 0
