@@ -66,7 +66,6 @@ def test_the_warm_start_of_a_fixed_side_learner_records_only_its_team():
     env.close()
 
 
-@pytest.mark.slow
 def _learner_yamls(tmp_path) -> list[str]:
     """The two tiny learners as YAML files (the ``duel`` command reads files; JSON is YAML)."""
     configs = []
@@ -77,6 +76,7 @@ def _learner_yamls(tmp_path) -> list[str]:
     return configs
 
 
+@pytest.mark.slow
 def test_one_alternation_trains_each_learner_against_the_others_snapshots(tmp_path):
     """``rocketdrl-ma duel``: the shooter's phase meets only the scripted goalie (no keeper yet), the keeper's phase
     has the shooter's two snapshots in its slots, and a second call resumes both learners."""
