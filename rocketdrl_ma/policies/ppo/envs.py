@@ -21,6 +21,7 @@ from gymnasium import spaces
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.registry import load_teacher
+from rocketdrl_ma.rules.state import TEAM_NAMES, agent_team
 
 from .shaping import make_shaping
 
@@ -43,7 +44,7 @@ def episode_success(agent: str, info: dict) -> bool:
         return bool(summary["is_success"])
     if "is_success" in info:
         return bool(info["is_success"])
-    return summary.get("winner") == agent.rpartition("_")[0]
+    return summary.get("winner") == TEAM_NAMES[agent_team(agent)]
 
 
 def episode_outcomes(agent: str, info: dict) -> tuple[str, ...]:
@@ -56,7 +57,7 @@ def episode_outcomes(agent: str, info: dict) -> tuple[str, ...]:
     if "results" in summary:
         return tuple(r["reason"] or r["outcome"] for r in summary["results"]) or ("unfinished",)
     winner = summary.get("winner")
-    return ("draw",) if winner is None else ("win",) if winner == agent.rpartition("_")[0] else ("loss",)
+    return ("draw",) if winner is None else ("win",) if winner == TEAM_NAMES[agent_team(agent)] else ("loss",)
 
 
 @dataclass
