@@ -20,8 +20,9 @@ from rocketdrl_ma.config import load_config, load_yaml_file, resolve_shipped_pat
 from rocketdrl_ma.validation import (check_bool, check_choice, check_int, check_number, section_values,
                                      yaml_key)
 
-from rocketdrl_ma.policies.ppo.selfplay.config import (ImitateConfig, KickstartConfig, SelfPlayConfig, check_imitate,
-                                                        check_kickstart, check_selfplay)
+from rocketdrl_ma.policies.ppo.selfplay.config import (ImitateConfig, KickstartConfig, SelfPlayConfig,
+                                                        check_checkpoint_path, check_imitate, check_kickstart,
+                                                        check_selfplay)
 
 from .critic import CRITICS
 from .features import FEATURES
@@ -118,6 +119,11 @@ class TrainConfig:
     kickstart: KickstartConfig | None = None
     """for a game without self-play: a fading distillation term towards a scripted bot on the learner's own
     states, as ``selfplay.kickstart`` (with ``selfplay`` it goes there)"""
+    init_path: str | None = None
+    """a checkpoint a fresh run starts from (ML-Agents' ``init_path``): its weights and normaliser statistics, the
+    statistics then held fixed as after a warm start; one trained on a smaller ``team_relative`` game (a 1v1 policy
+    starting a 2v2 run) is grown to this game's teams and plays as before (``transfer.py``); null: fresh weights.
+    ``--resume`` continues a run instead; a warm start (``imitate``) is the other way to start, not both"""
     n_workers: int | None = None
     """rollout worker processes, each stepping ``ceil(n_envs / n_workers)`` env copies with its own copy of the
     policy (``workers.py``); null: one per core of the machine; 0: the env copies run in the trainer's own
@@ -200,6 +206,13 @@ def validate_train_config(raw: Mapping[str, Any]) -> TrainConfig:
     for key in ("imitate", "kickstart"):
         if values[key] and values["selfplay"]:
             raise ValueError(f"{key}: with selfplay, the teacher goes under selfplay.{key}")
+    if values["init_path"] is not None:
+        if not isinstance(values["init_path"], str):
+            raise ValueError(f"init_path: expected the path of a checkpoint (.pt with its JSON beside it) or null, "
+                             f"got {values['init_path']!r}")
+        check_checkpoint_path("init_path", values["init_path"])
+        if values["imitate"] or (values["selfplay"] and values["selfplay"].imitate):
+            raise ValueError("init_path: a run starts from a checkpoint or from a warm start (imitate), not both")
     if values["selfplay"] and values["curriculum"]:
         raise ValueError("selfplay: a curriculum needs a minigame's difficulty; self-play trains on a match")
     # The env config is validated now, so a typo there fails before any training starts.

@@ -38,6 +38,7 @@ from .envs import Episode
 from .model import PPOModel, action_spec
 from .rollout import RolloutEnv
 from .rollout_policy import RolloutPolicy
+from .transfer import init_from_checkpoint
 from .workers import Rollouts, WorkerPlan, default_workers
 
 SUCCESS_WINDOW = 100  # episodes behind the progress bar's success rate and return
@@ -152,14 +153,17 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             optimizer.load_state_dict(torch.load(sidecar(path, ".optim.pt"), map_location=device, weights_only=True))
         agent_steps = int(meta["agent_steps"])
         difficulty = meta.get("difficulty", difficulty)
+    elif cfg.init_path is not None:
+        init_from_checkpoint(model, probe.obs_dim, cfg.init_path)
     opponents = None
     if cfg.selfplay:  # the learner is also an opponent; snapshots join the pool
         opponents = OpponentPool(cfg, run_dir, probe.obs_dim)
         opponents.attach(model, agent_steps)
     elif agent_steps == 0 and cfg.imitate:  # a fresh run with a teacher: start from its clone
         warm_start(model, cfg, log=print, spec=cfg.imitate)
-    if agent_steps == 0 and cfg.teacher_imitate is not None:
-        # the clone before any PPO update, so an evaluation can tell what PPO added to it
+    started_from = cfg.teacher_imitate is not None or cfg.init_path is not None  # a clone's or a checkpoint's weights
+    if agent_steps == 0 and started_from:
+        # the clone or the checkpoint before any PPO update, so an evaluation can tell what PPO added to it
         save_checkpoint(run_dir / "warm_start.pt", model,
                         checkpoint_meta(cfg, model, probe.obs_dim, 0, {"warm_start": True}))
     policy = RolloutPolicy(model, opponents.slot_models if opponents else None,
@@ -180,8 +184,9 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     match = MatchTally(probe.rows_per_copy)
     # A warm-started policy was fitted to inputs scaled by the imitation data's statistics. Fed with PPO's
     # own states they drift (by up to 0.5 in mean and 1.5 in variance over 0.4M self-play steps), and the
-    # clone's weights under the drifted statistics lost what PPO's weights under the clone's kept: keep them.
-    frozen_norm = cfg.teacher_imitate is not None
+    # clone's weights under the drifted statistics lost what PPO's weights under the clone's kept: keep them
+    # (and a checkpoint's, which are its own clone's or a run's in another game).
+    frozen_norm = started_from
     iteration, env_config = 0, wcfg.env
     bar = tqdm(total=cfg.max_steps, initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps, busy_learning = None, agent_steps, 0.0

@@ -15,6 +15,14 @@ from .pfsp import WEIGHTINGS
 SIDES = ("alternate", "blue", "orange")
 
 
+def check_checkpoint_path(field: str, path: str) -> None:
+    """A ValueError naming ``field`` unless ``path`` (as given, or a shipped one) is a checkpoint with its JSON beside
+    it: looked up at config load, so a wrong path fails before any worker starts."""
+    found = resolve_shipped_path(path, field)
+    if not found.with_name(found.name.removesuffix(".pt") + ".json").is_file():
+        raise ValueError(f"{field}: checkpoint {str(found)!r} has no JSON of its config beside it")
+
+
 def check_teacher(field: str, name: object) -> str:
     """``name`` if ``policies.registry.load_teacher`` can load it: a scripted bot's name (bare or ``scripted:NAME``)
     or ``checkpoint:PATH`` of a file with its JSON beside it (looked up now, so a wrong path fails at config load,
@@ -25,9 +33,7 @@ def check_teacher(field: str, name: object) -> str:
     if kind == "scripted" and argument in SCRIPTED_BOTS:
         return name
     if kind == "checkpoint":
-        path = resolve_shipped_path(argument, field)
-        if not path.with_name(path.name.removesuffix(".pt") + ".json").is_file():
-            raise ValueError(f"{field}: checkpoint {str(path)!r} has no JSON of its config beside it")
+        check_checkpoint_path(field, argument)
         return name
     raise ValueError(f"{field}: {name!r} is not one of the scripted bots {sorted(SCRIPTED_BOTS)} (bare or "
                      "'scripted:NAME') nor 'checkpoint:PATH'")
