@@ -1,4 +1,4 @@
-"""``init_path``: a fresh run starts from a checkpoint, and a 1v1 network grows to a bigger game's observation while
+"""``init_path``: a fresh run starts from a checkpoint, and a network trained on a smaller team game grows to a bigger one
 playing exactly as before on the cars it has slots for (policies/ppo/transfer.py); real envs, a real training run."""
 import json
 
@@ -14,15 +14,16 @@ from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.ppo.transfer import init_from_checkpoint, team_layout_size
 
 ONE_V_ONE = "policies/checkpoints/selfplay_1v1_kickstart.pt"
-TWO_V_TWO = "policies/checkpoints/selfplay_2v2.pt"
+TWO_V_TWO = "policies/checkpoints/selfplay_2v2_from_1v1.pt"
 N_SELF_AND_BALL, N_CAR, N_TAIL = 29, 20, 38  # team_relative blocks: own car + ball, one car, pads + game
 
 
-def _one_v_one_view(obs: np.ndarray, team_size: int) -> np.ndarray:
-    """The 1v1 observation inside a bigger game's: own car, ball, the first opponent slot, pads and game."""
-    first_opponent = N_SELF_AND_BALL + N_CAR * (team_size - 1)
-    return np.concatenate([obs[..., :N_SELF_AND_BALL], obs[..., first_opponent:first_opponent + N_CAR],
-                           obs[..., -N_TAIL:]], axis=-1)
+def _sub_game_view(obs: np.ndarray, old_k: int, new_k: int) -> np.ndarray:
+    """The observation of a game with teams of ``old_k`` inside one with teams of ``new_k``: own car, ball, the first
+    ``old_k - 1`` team-mate and first ``old_k`` opponent slots, pads and game."""
+    mates, opponents = N_SELF_AND_BALL, N_SELF_AND_BALL + N_CAR * (new_k - 1)
+    return np.concatenate([obs[..., :N_SELF_AND_BALL], obs[..., mates:mates + N_CAR * (old_k - 1)],
+                           obs[..., opponents:opponents + N_CAR * old_k], obs[..., -N_TAIL:]], axis=-1)
 
 
 def test_team_layout_sizes():
@@ -30,14 +31,14 @@ def test_team_layout_sizes():
     assert team_layout_size(107) is None and team_layout_size(22) is None
 
 
-@pytest.mark.parametrize("team_size", [2, 3])
-def test_a_grown_1v1_network_plays_as_the_checkpoint_on_its_car_ball_and_first_opponent(team_size):
-    old, _ = load_model(ONE_V_ONE)
+@pytest.mark.parametrize("checkpoint, old_k, team_size", [(ONE_V_ONE, 1, 2), (ONE_V_ONE, 1, 3), (TWO_V_TWO, 2, 3)])
+def test_a_grown_network_plays_as_its_checkpoint_on_the_cars_it_had_slots_for(checkpoint, old_k, team_size):
+    old, _ = load_model(checkpoint)
     env = rocketdrl_ma.parallel_env("matches/2v2.yaml", team_size=team_size, action="lookup", kickoff_countdown_s=0.0)
     obs, _ = env.reset(seed=11)
     obs_dim = env.observation_space("blue_0").shape[0]
     grown = PPOModel(obs_dim, old.action, 256, 2, True, features="car_local")
-    init_from_checkpoint(grown, obs_dim, ONE_V_ONE)
+    init_from_checkpoint(grown, obs_dim, checkpoint)
     rng = np.random.default_rng(0)
     seen = []
     for _ in range(60):  # random driving spreads the cars, so the other cars' inputs are far from zero
@@ -45,15 +46,16 @@ def test_a_grown_1v1_network_plays_as_the_checkpoint_on_its_car_ball_and_first_o
         obs = env.step({a: int(rng.integers(90)) for a in env.agents})[0]
     env.close()
     batch = torch.as_tensor(np.stack(seen))
-    view = torch.as_tensor(_one_v_one_view(np.stack(seen), team_size))
+    view = torch.as_tensor(_sub_game_view(np.stack(seen), old_k, team_size))
     with torch.no_grad():
         assert torch.allclose(grown.policy(grown.obs_norm(batch)), old.policy(old.obs_norm(view)), atol=1e-4)
         assert torch.allclose(grown.value(grown.obs_norm(batch)), old.value(old.obs_norm(view)), atol=1e-4)
     assert np.array_equal(grown.act_deterministic(batch.numpy()), old.act_deterministic(view.numpy()))
-    # the new slots (team-mates, other opponents) start at zero weight, but are inputs PPO can learn to use
+    # the last team-mate slot is new: it starts at zero weight, an input PPO can learn to use
     first_layer = grown.policy[0].weight
-    assert first_layer[:, N_SELF_AND_BALL:N_SELF_AND_BALL + N_CAR].abs().sum() == 0.0
-    assert first_layer.requires_grad
+    last_mate = N_SELF_AND_BALL + N_CAR * (team_size - 2)
+    assert first_layer[:, last_mate:last_mate + N_CAR].abs().sum() == 0.0
+    assert first_layer[:, :N_SELF_AND_BALL].abs().sum() > 0.0 and first_layer.requires_grad
 
 
 def test_init_path_is_validated_and_a_network_only_grows_to_a_bigger_team_game(tmp_path):

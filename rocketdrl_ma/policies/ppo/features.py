@@ -28,6 +28,8 @@ FORWARD, UP, PRESENT = CAR_FEATURES.index("forward_x"), CAR_FEATURES.index("up_x
 BALL_POS, BALL_VEL = BALL_FEATURES.index("pos_x"), BALL_FEATURES.index("vel_x")
 LOCAL_DISTANCE_UU = 2000.0  # scale of the local offsets (about a third of the field's half length)
 LOCAL_SPEED_UU_S = 2300.0   # scale of the local velocities (supersonic car speed)
+OWN_LOCAL_FEATURES = 12     # the ball's offset and relative velocity, the car's own velocity and angular velocity
+OTHER_LOCAL_FEATURES = 6    # each other car's offset and relative velocity
 
 
 class CarLocal(nn.Module):
@@ -45,7 +47,7 @@ class CarLocal(nn.Module):
             raise ValueError(f"features: 'car_local' needs the team_relative observation (sizes 87, 127, 167, "
                              f"207 for 1v1..4v4), got an observation of size {obs_dim}")
         self.n_others = others
-        self.out_dim = obs_dim + 12 + 6 * others  # ball 6 (offset, velocity), own 6, each other car 6
+        self.out_dim = obs_dim + OWN_LOCAL_FEATURES + OTHER_LOCAL_FEATURES * others
         self.register_buffer("pos_scale", torch.as_tensor(POS_SCALE, dtype=torch.float32), persistent=False)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:

@@ -20,13 +20,11 @@ import torch
 from rocketdrl_ma.env.observations import BALL_FEATURES, CAR_FEATURES, GAME_FEATURES, N_PADS
 
 from .checkpoint import read_meta, resolve_checkpoint
-from .features import make_features
+from .features import OTHER_LOCAL_FEATURES, OWN_LOCAL_FEATURES, make_features
 from .model import PPOModel
 
 N_CAR, N_BALL = len(CAR_FEATURES), len(BALL_FEATURES)
 N_FIXED = N_CAR + N_BALL + N_PADS + len(GAME_FEATURES)  # own car, ball, pads, game: every layout has them
-OWN_FEATURES = 12  # car_local's ball offset and velocity, own velocity and angular velocity (features.py)
-OTHER_FEATURES = 6  # car_local's offset and relative velocity of each other car
 
 
 def team_layout_size(obs_dim: int) -> int | None:
@@ -54,15 +52,15 @@ def _input_positions(old_k: int, new_k: int, features: str) -> tuple[list[int], 
     fresh = [N_CAR + N_BALL + N_CAR * s + f for s in new_slots for f in range(N_CAR)]
     donors = [N_CAR + N_BALL + N_CAR * first_opponent + f for _ in new_slots for f in range(N_CAR)]
     if features == "car_local":
-        positions += range(new_obs, new_obs + OWN_FEATURES)
+        positions += range(new_obs, new_obs + OWN_LOCAL_FEATURES)
         for slot in other_slot:
-            at = new_obs + OWN_FEATURES + OTHER_FEATURES * slot
-            positions += range(at, at + OTHER_FEATURES)
-        old_first = old_obs + OWN_FEATURES + OTHER_FEATURES * first_opponent
+            at = new_obs + OWN_LOCAL_FEATURES + OTHER_LOCAL_FEATURES * slot
+            positions += range(at, at + OTHER_LOCAL_FEATURES)
+        old_first = old_obs + OWN_LOCAL_FEATURES + OTHER_LOCAL_FEATURES * first_opponent
         for s in new_slots:
-            at = new_obs + OWN_FEATURES + OTHER_FEATURES * s
-            fresh += range(at, at + OTHER_FEATURES)
-            donors += range(old_first, old_first + OTHER_FEATURES)
+            at = new_obs + OWN_LOCAL_FEATURES + OTHER_LOCAL_FEATURES * s
+            fresh += range(at, at + OTHER_LOCAL_FEATURES)
+            donors += range(old_first, old_first + OTHER_LOCAL_FEATURES)
     return positions, fresh, donors
 
 
