@@ -1,5 +1,6 @@
-"""``init_path``: a fresh run starts from a checkpoint, and a network trained on a smaller team game grows to a bigger one
-playing exactly as before on the cars it has slots for (policies/ppo/transfer.py); real envs, a real training run."""
+"""``init_path``: a fresh run starts from a checkpoint, and a network trained on a smaller team game grows to a
+bigger one, playing exactly as before on the cars it has slots for (policies/ppo/transfer.py); real envs, a real
+training run."""
 import json
 
 import numpy as np
