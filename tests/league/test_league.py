@@ -130,14 +130,23 @@ def test_killed_league_resumes_without_losing_or_duplicating(tmp_path):
     assert run_league(cfg).played == 0  # a finished league plays nothing more
 
 
-def test_the_delivered_selfplay_policy_beats_the_ball_chaser_from_either_side():
-    """The committed 1v1 checkpoint, in the first two full 5-minute matches of its league (one per side):
-    a change to physics, observations or the lookup table that breaks what it learned shows up here."""
-    cfg = load_league_config(REPO / "leagues/selfplay_kickstart_vs_ball_chaser.yaml")
+@pytest.mark.parametrize("league_yaml, trained, opponent", [
+    ("leagues/selfplay_kickstart_vs_ball_chaser.yaml", "selfplay_kickstart", "ball_chaser"),
+    pytest.param("leagues/selfplay_2v2_from_1v1_vs_ball_chaser.yaml", "selfplay_2v2_from_1v1", "ball_chaser",
+                 marks=pytest.mark.slow),
+    pytest.param("leagues/selfplay_2v2_from_1v1_vs_rotator.yaml", "selfplay_2v2_from_1v1", "rotator",
+                 marks=pytest.mark.slow),
+    pytest.param("leagues/selfplay_3v3_from_2v2_vs_ball_chaser.yaml", "selfplay_3v3_from_2v2", "ball_chaser",
+                 marks=pytest.mark.slow)])
+def test_a_delivered_selfplay_policy_wins_its_first_league_match_on_either_side(league_yaml, trained, opponent):
+    """A committed self-play checkpoint (1v1, the 2v2 and 3v3 teams), in the first two full 5-minute matches of its
+    league (one per side): a change to physics, observations or the lookup table that breaks what it learned shows
+    up here."""
+    cfg = load_league_config(REPO / league_yaml)
     first_two = schedule(cfg)[:2]
-    assert {m.blue for m in first_two} == {"selfplay_kickstart", "ball_chaser"}
+    assert {m.blue for m in first_two} == {trained, opponent}
     for match in first_two:
         result = play_local(cfg, match)
         goals = {match.blue: result.score_blue, match.orange: result.score_orange}
         assert result.duration_s >= 300.0
-        assert goals["selfplay_kickstart"] > goals["ball_chaser"], (match.key, goals)
+        assert goals[trained] > goals[opponent], (match.key, goals)
