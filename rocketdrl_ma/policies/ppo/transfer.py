@@ -20,7 +20,7 @@ import torch
 from rocketdrl_ma.env.observations import BALL_FEATURES, CAR_FEATURES, GAME_FEATURES, N_PADS
 
 from .checkpoint import read_meta, resolve_checkpoint
-from .features import OTHER_LOCAL_FEATURES, OWN_LOCAL_FEATURES, make_features
+from .features import OTHER_LOCAL_FEATURES, OWN_LOCAL_FEATURES
 from .model import PPOModel
 
 N_CAR, N_BALL = len(CAR_FEATURES), len(BALL_FEATURES)
@@ -117,6 +117,4 @@ def init_from_checkpoint(model: PPOModel, obs_dim: int, path: str | Path) -> Non
     if observation != "team_relative":
         raise ValueError(f"init_path: {path} observes {observation!r} with {net['obs_dim']} numbers, this run "
                          f"{obs_dim}; only a team_relative network grows to a bigger game")
-    # make_features checks that this run's observation is team_relative too
-    make_features(model.features, obs_dim)
     model.load_state_dict(grow_state_dict(old, net["obs_dim"], model, obs_dim))
