@@ -1,3 +1,3 @@
 """Scripted bots, PPO self-play training, league evaluation and ratings."""
 # every module that defines scripted bots, so each is registered (scripted.SCRIPTED_BOTS) whatever was imported first
-from . import minigame_bots, scripted  # noqa: F401
+from . import aerial_shooter, minigame_bots, scripted  # noqa: F401

@@ -13,7 +13,7 @@ from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS, ScriptedBot, make_scripted
 
 ROOT = Path(__file__).resolve().parents[2]
-SHIPPED = ["ball_chaser", "barrier_shooter", "flip_chaser", "goalie", "idle", "rotator"]
+SHIPPED = ["aerial_shooter", "ball_chaser", "barrier_shooter", "flip_chaser", "goalie", "idle", "rotator"]
 
 # each a fresh interpreter whose first import of the package is a different module
 FIRST_IMPORTS = {
@@ -77,6 +77,6 @@ def test_a_users_bot_joins_by_being_defined_and_names_are_checked():
             type("Spaced", (ScriptedBot,), {"bot_name": "a bot", "controls": Reverser.controls})
     finally:
         SCRIPTED_BOTS.pop("test_reverser", None)
-    with pytest.raises(ValueError, match=r"^bot: unknown scripted bot 'test_reverser'; allowed: \['ball_chaser', "
-                                         r"'barrier_shooter', "):
+    with pytest.raises(ValueError, match=r"^bot: unknown scripted bot 'test_reverser'; allowed: \['aerial_shooter', "
+                                         r"'ball_chaser', 'barrier_shooter', "):
         make_scripted("test_reverser")
