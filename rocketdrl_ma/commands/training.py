@@ -33,9 +33,16 @@ def _run_train(args: argparse.Namespace) -> int:
 
 
 def _run_eval(args: argparse.Namespace) -> int:
-    from rocketdrl_ma.policies.ppo import evaluate, evaluate_against
+    from rocketdrl_ma.policies.ppo import evaluate, evaluate_against, evaluate_policy
 
-    if args.opponent is None:
+    scripted = args.checkpoint.startswith("scripted:")
+    if scripted != (args.env is not None):
+        raise ValueError("--env: the env config a scripted bot plays (e.g. eval scripted:aerial_shooter --env "
+                         "minigames/aerial.yaml); a checkpoint plays the env it trained on, so only with a bot")
+    if scripted:
+        r = evaluate_policy(args.checkpoint, args.env, args.episodes, seed=args.seed, n_envs=args.n_envs,
+                            opponent=args.opponent, side=args.side or "blue")
+    elif args.opponent is None:
         if args.side is not None:
             raise ValueError("--side: only with --opponent (alone, the checkpoint plays every car)")
         r = evaluate(args.checkpoint, args.episodes, seed=args.seed, n_envs=args.n_envs)
@@ -95,7 +102,9 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=_run_train)
     e = sub.add_parser("eval", help="greedy evaluation of a checkpoint: success rate and mean return")
-    e.add_argument("checkpoint", help="a .pt checkpoint with its .json next to it")
+    e.add_argument("checkpoint", help="a .pt checkpoint with its .json next to it, or scripted:BOT with --env")
+    e.add_argument("--env", default=None, metavar="CONFIG",
+                   help="with scripted:BOT: the env config it plays (a checkpoint plays the one it trained on)")
     e.add_argument("--episodes", type=int, default=200)
     e.add_argument("--n-envs", type=int, default=4, help="env copies played side by side")
     e.add_argument("--seed", type=int, default=10_000, help="first env seed (training uses 0..n_envs-1)")

@@ -77,3 +77,34 @@ def test_the_eval_command_takes_an_opponent(keeper, capsys):
     assert "outcomes: timeout 2" in out
     with pytest.raises(ValueError, match="--side"):
         main(["eval", str(keeper), "--side", "blue", "--episodes", "1"])
+
+
+def test_the_eval_command_plays_a_scripted_bot_on_the_env_it_names(capsys):
+    """A scripted teacher's own figure, on the episodes a checkpoint's evaluation plays: the aerial shooter scores the
+    seed's Aerial (one team, no opponent) and an idle car never does."""
+    aerial = ["--env", "minigames/aerial.yaml", "--episodes", "4", "--n-envs", "2"]
+    assert main(["eval", "scripted:aerial_shooter", *aerial]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("scripted:aerial_shooter: success ") and "outcomes: goal" in out
+    assert float(out.split("success ")[1].split("%")[0]) >= 50.0  # 94.5 % over 200 episodes (README)
+    assert main(["eval", "scripted:idle", *aerial]) == 0
+    assert "scripted:idle: success 0.0% over 4 episodes" in capsys.readouterr().out
+    duel = ["--env", "minigames/penalty_duel.yaml", "--episodes", "2", "--n-envs", "2"]
+    assert main(["eval", "scripted:idle", *duel, "--opponent", "scripted:idle", "--side", "orange"]) == 0
+    assert "success 100.0% over 2 episodes" in capsys.readouterr().out  # nobody shoots: the keeper's rounds
+
+
+def test_a_scripted_bot_needs_an_env_and_the_opponents_must_fit_it(keeper):
+    with pytest.raises(ValueError, match="^--env: the env config a scripted bot plays"):
+        main(["eval", "scripted:aerial_shooter", "--episodes", "1"])
+    with pytest.raises(ValueError, match="^--env: "):
+        main(["eval", str(keeper), "--env", "minigames/aerial.yaml", "--episodes", "1"])
+    with pytest.raises(ValueError, match="^bot: unknown scripted bot 'nobot'"):
+        main(["eval", "scripted:nobot", "--env", "minigames/aerial.yaml", "--episodes", "1"])
+    with pytest.raises(ValueError, match="^opponent: .* has cars on the other team"):
+        main(["eval", "scripted:idle", "--env", "minigames/penalty_duel.yaml", "--episodes", "1"])
+    with pytest.raises(ValueError, match="^opponent: .* nobody for the opponent"):
+        main(["eval", "scripted:idle", "--env", "minigames/aerial.yaml", "--opponent", "scripted:idle",
+              "--episodes", "1"])
+    with pytest.raises(ValueError, match="^side: .* has no orange cars"):
+        main(["eval", "scripted:idle", "--env", "minigames/aerial.yaml", "--side", "orange", "--episodes", "1"])

@@ -7,8 +7,9 @@ opponent policy).
 """
 from .checkpoint import CheckpointPolicy, load_checkpoint_policy, load_model, save_checkpoint
 from .config import TrainConfig, load_train_config, validate_train_config
-from .evaluate import EvalResult, evaluate, evaluate_against
+from .evaluate import EvalResult, evaluate, evaluate_against, evaluate_policy
 from .trainer import TrainResult, train
 
 __all__ = ["CheckpointPolicy", "EvalResult", "TrainConfig", "TrainResult", "evaluate", "evaluate_against",
-           "load_checkpoint_policy", "load_model", "load_train_config", "save_checkpoint", "train", "validate_train_config"]
+           "evaluate_policy", "load_checkpoint_policy", "load_model", "load_train_config", "save_checkpoint", "train",
+           "validate_train_config"]

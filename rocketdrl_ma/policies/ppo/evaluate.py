@@ -85,10 +85,22 @@ def evaluate_against(checkpoint: str | Path, opponent: str, episodes: int, seed:
                         lambda: load_policy(opponent), episodes, seed, n_envs)
 
 
+def evaluate_policy(policy: str, config: str, episodes: int, seed: int = 10_000, n_envs: int = 4,
+                    opponent: str | None = None, side: str = "blue", overrides: dict | None = None) -> EvalResult:
+    """``policy`` (a spec: ``scripted:aerial_shooter``, ``checkpoint:PATH``) on ``config``'s env, which a scripted
+    bot does not carry as a checkpoint does: the teacher's own figure, on the episodes ``evaluate`` plays with the
+    same seed and ``n_envs``. ``opponent`` (a spec) drives the other team's cars, if the env has one."""
+    load_policy(policy)  # a bad spec fails here, before any env is built
+    return play_against(config, overrides or {}, side, lambda: load_policy(policy),
+                        None if opponent is None else (lambda: load_policy(opponent)), episodes, seed, n_envs)
+
+
 def play_against(config: str | dict, overrides: dict, side: str, player: Callable[[], Policy],
-                 opponent: Callable[[], Policy], episodes: int, seed: int = 10_000, n_envs: int = 4) -> EvalResult:
-    """Episodes of a two-team game with ``player()`` driving every car of ``side`` and ``opponent()`` the others
-    (one instance per car); success is ``side`` winning, the return that of ``side``'s cars.
+                 opponent: Callable[[], Policy] | None, episodes: int, seed: int = 10_000,
+                 n_envs: int = 4) -> EvalResult:
+    """Episodes with ``player()`` driving every car of ``side`` and ``opponent()`` the others (one instance per
+    car; None for a game with one team, as the shooting minigames without a keeper); success is ``side``
+    winning (a minigame's: more goals than misses), the return that of ``side``'s cars.
 
     Every car is a ``Policy`` acting through its own observation builder and action parser, as in a league match,
     and the env takes their controls through the lossless ``continuous`` parser, so a policy trained with other
@@ -103,9 +115,13 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
     try:
         mine = [a for a in vec.possible_agents if a.startswith(side)]
         theirs = [a for a in vec.possible_agents if a not in mine]
-        if not theirs:
+        if not mine:
+            raise ValueError(f"side: {config} has no {side} cars ({vec.possible_agents})")
+        if not theirs and opponent is not None:
             raise ValueError(f"opponent: {config} has no team but {side}'s ({vec.possible_agents}): "
                              "nobody for the opponent to play")
+        if theirs and opponent is None:
+            raise ValueError(f"opponent: {config} has cars on the other team ({theirs}): name a policy to drive them")
         players: list[dict[str, Policy]] = [{**{a: player() for a in mine}, **{a: opponent() for a in theirs}}
                                             for _ in range(n_envs)]
         quota = [episodes // n_envs + (copy < episodes % n_envs) for copy in range(n_envs)]
