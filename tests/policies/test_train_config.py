@@ -57,7 +57,7 @@ def test_sections_are_typed_with_defaults_and_empty_means_off():
     ({"env": "minigames/penalty.yaml", "n_envs": 0}, r"^n_envs: must be >= 1, got 0"),
     ({"env": "minigames/penalty.yaml", "curriculum": [0.1]}, r"^curriculum: expected a mapping with \['start', "),
     ({"env": "matches/1v1.yaml", "selfplay": {"scripted": ["striker"]}},
-     r"^selfplay.scripted: 'striker' is not one of \['ball_chaser', "),
+     r"^selfplay.scripted: 'striker' is not one of \['aerial_shooter', 'ball_chaser', "),
     ({"env": "matches/1v1.yaml", "selfplay": {"kickstart": {"decay_steps": 0}}},
      r"^selfplay.kickstart.decay_steps: must be >= 1, got 0"),
     ({"env": "minigames/penalty.yaml", "watch_connect": "tcp/127.0.0.1:7447"}, r"^watch_connect: expected a list"),
