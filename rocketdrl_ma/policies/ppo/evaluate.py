@@ -87,9 +87,10 @@ def evaluate_against(checkpoint: str | Path, opponent: str, episodes: int, seed:
 
 def evaluate_policy(policy: str, config: str, episodes: int, seed: int = 10_000, n_envs: int = 4,
                     opponent: str | None = None, side: str = "blue", overrides: dict | None = None) -> EvalResult:
-    """``policy`` (a spec: ``scripted:aerial_shooter``, ``checkpoint:PATH``) on ``config``'s env, which a scripted
-    bot does not carry as a checkpoint does: the teacher's own figure, on the episodes ``evaluate`` plays with the
-    same seed and ``n_envs``. ``opponent`` (a spec) drives the other team's cars, if the env has one."""
+    """``policy`` (a spec: ``scripted:aerial_shooter``, ``checkpoint:PATH``) played on ``config``'s env: how a scripted
+    bot, which carries no env of its own as a checkpoint does, is scored (a teacher's own figure). The episodes are
+    those ``evaluate`` plays with the same seed and ``n_envs``; ``opponent`` (a spec) drives the other team's cars,
+    if the env has one."""
     load_policy(policy)  # a bad spec fails here, before any env is built
     return play_against(config, overrides or {}, side, lambda: load_policy(policy),
                         None if opponent is None else (lambda: load_policy(opponent)), episodes, seed, n_envs)
