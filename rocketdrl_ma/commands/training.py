@@ -101,7 +101,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
                    help="update on each worker's batch as it arrives (overlaps collection and learning)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(run=_run_train)
-    e = sub.add_parser("eval", help="greedy evaluation of a checkpoint: success rate and mean return")
+    e = sub.add_parser("eval", help="greedy evaluation of a checkpoint (or a scripted bot): success rate and mean "
+                                    "return")
     e.add_argument("checkpoint", help="a .pt checkpoint with its .json next to it, or scripted:BOT with --env")
     e.add_argument("--env", default=None, metavar="CONFIG",
                    help="with scripted:BOT: the env config it plays (a checkpoint plays the one it trained on)")
