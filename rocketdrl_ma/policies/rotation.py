@@ -17,11 +17,16 @@ Every car of a team works the roles out from the same state, so they agree witho
 
 A car that is not first and has to come back (its spot is behind it) takes an active boost pad on the way when it
 is short of boost and the pad costs little of a detour: the boost collected on the way back.
+
+At a kickoff the two nearest cars go. The second one aims beside the ball, by how far depends on the kickoff
+layout (``kickoff_aim``): it meets the ball just after the four-car collision at the centre and sends it on
+towards the opponents' goal, which their two cars, both at the centre, cannot cover.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from enum import IntEnum
+from enum import Enum, IntEnum
 
 import numpy as np
 
@@ -51,6 +56,29 @@ class Role(IntEnum):
     FIRST = 0
     SECOND = 1
     LAST = 2
+
+
+class KickoffLane(Enum):
+    """Where a car comes from at a kickoff, by its bearing from the centre spot: a diagonal spot (39 deg off the
+    field's long axis), an off-centre spot (4 deg), or straight behind the ball."""
+    DIAGONAL = "diagonal"
+    OFF_CENTRE = "off_centre"
+    BACK = "back"
+
+
+#: bearings (deg off the long axis) that separate the kickoff lanes
+DIAGONAL_BEARING_DEG, OFF_CENTRE_BEARING_DEG = 20.0, 1.0
+#: how far beside the ball (uu along x, towards the car's own side when positive) the second kickoff taker aims, by
+#: the lanes of the first and second taker. Searched per layout against two flip-chasers, with the real 3 s
+#: countdown, over every 2v2 kickoff layout from both ends (README, "Team play"); aiming at the ball's centre as
+#: the first taker does, the second car's touch sends the ball towards a corner.
+KICKOFF_SECOND_AIM_UU: dict[tuple[KickoffLane, KickoffLane], float] = {
+    (KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -80.0,
+    (KickoffLane.DIAGONAL, KickoffLane.BACK): -200.0,
+    (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 300.0,
+    (KickoffLane.OFF_CENTRE, KickoffLane.BACK): -100.0,
+    (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): -200.0,
+}
 
 
 @dataclass(frozen=True)
@@ -94,15 +122,42 @@ def is_kickoff(view: TeamView) -> bool:
     return abs(view.ball_pos[0]) < 1.0 and abs(view.ball_pos[1]) < 1.0 and float(np.linalg.norm(view.ball_vel)) < 1.0
 
 
+def kickoff_takers(view: TeamView) -> list[str]:
+    """The team's cars in the order they reach the centre spot (ties to the lower name); the first
+    ``KICKOFF_TAKERS`` go for the ball at a kickoff."""
+    times = {a: arrival_s(view.pos[a], view.vel[a], view.ball_pos) for a in view.agents}
+    return sorted(view.agents, key=lambda a: (times[a], a))
+
+
+def kickoff_lane(pos: np.ndarray) -> KickoffLane:
+    """The lane a car at ``pos`` (team frame) drives in towards the centre spot."""
+    bearing_deg = math.degrees(math.atan2(abs(pos[0]), abs(pos[1])))
+    if bearing_deg > DIAGONAL_BEARING_DEG:
+        return KickoffLane.DIAGONAL
+    return KickoffLane.OFF_CENTRE if bearing_deg > OFF_CENTRE_BEARING_DEG else KickoffLane.BACK
+
+
+def kickoff_aim(view: TeamView, agent: str) -> np.ndarray:
+    """Where ``agent``, a kickoff taker, drives at: the ball for the first, for the second beside it by
+    ``KICKOFF_SECOND_AIM_UU`` of its layout (towards its own side of the field's long axis when positive; a car on
+    the axis counts as on the +x side). The lanes are read from the cars' positions each decision."""
+    order = kickoff_takers(view)
+    if len(order) < 2 or agent != order[1]:
+        return view.ball_pos
+    pos = view.pos[agent]
+    aside_uu = KICKOFF_SECOND_AIM_UU.get((kickoff_lane(view.pos[order[0]]), kickoff_lane(pos)), 0.0)
+    side = math.copysign(1.0, pos[0]) if abs(pos[0]) > 1.0 else 1.0
+    return view.ball_pos + np.array([side * aside_uu, 0.0, 0.0])
+
+
 def assign_roles(view: TeamView, last_touch: str | None) -> dict[str, Role]:
     """Every live team-mate's role; ties go to the lower agent name, so all team-mates reach the same answer.
-    At a kickoff the two nearest cars go: the nearer takes it, the other arrives behind it for the follow-up (a
-    ball won by the opponents' first car then meets it, not an empty field)."""
+    At a kickoff the two nearest cars go: the nearer takes it, the other arrives just after it (``kickoff_aim``)."""
     if not view.agents:
         return {}
     times = {a: arrival_s(view.pos[a], view.vel[a], view.ball_pos) for a in view.agents}
     if is_kickoff(view):
-        by_time = sorted(view.agents, key=lambda a: (times[a], a))
+        by_time = kickoff_takers(view)
         takers = by_time[:KICKOFF_TAKERS]
         others = sorted(by_time[KICKOFF_TAKERS:], key=lambda a: (view.pos[a][1], a))
         return {**{a: Role.FIRST for a in takers}, **{a: Role.LAST if k == 0 else Role.SECOND for k, a in enumerate(others)}}

@@ -169,10 +169,7 @@ class FlipChaser(ScriptedBot):
             # the dodge needs a fresh press: release the held jump first, then press it with pitch
             return _ground_row(1.0, 0.0) if car.is_jumping else _air_row(pitch=-1.0, jump=True)
         if kickoff:
-            angle, distance = _angle_distance(pos, rot, ball)
-            if speed > 1200.0 and (distance - self.CONTACT_UU) / speed < self.KICKOFF_DODGE_S:
-                return _air_row(jump=True, boost=True)
-            return _ground_row(1.0, self._steer(angle), boost=True)
+            return self.kickoff_run(pos, rot, speed, ball)
         lead = ball + ball_vel * min(float(np.linalg.norm(ball - pos)) / 2000.0, 0.6)
         if pos[1] > ball[1] + 150.0:
             inner = math.copysign(1.0, lead[0]) if abs(lead[0]) > 150.0 else -math.copysign(1.0, pos[0] - lead[0])
@@ -181,6 +178,13 @@ class FlipChaser(ScriptedBot):
             to_goal = ATTACK_GOAL - lead
             target = lead - to_goal / np.linalg.norm(to_goal) * 110.0  # the ball-chaser's shot approach
         return self._drive(pos, rot, _out_of_goal_mouth(pos, target), speed)
+
+    def kickoff_run(self, pos: np.ndarray, rot: np.ndarray, speed: float, aim: np.ndarray) -> CarControls:
+        """Full boost at ``aim`` (the ball, or a point beside it), and the jump that starts the dodge into it."""
+        angle, distance = _angle_distance(pos, rot, aim)
+        if speed > 1200.0 and (distance - self.CONTACT_UU) / speed < self.KICKOFF_DODGE_S:
+            return _air_row(jump=True, boost=True)
+        return _ground_row(1.0, self._steer(angle), boost=True)
 
     def _steer(self, angle: float) -> float:
         return 0.0 if abs(angle) < self.STEER_DEADBAND_RAD else math.copysign(1.0, angle)
@@ -203,7 +207,8 @@ class Rotator(ScriptedBot):
     decision, identically by every team-mate, so at most two cars go for the ball. A car on the ball dodges into
     a ground ball it is lined up to shoot (the flip-chaser dodges only at kickoffs): the harder hit wins the
     challenge. Cars coming back take boost on the way. Alone on its team (1v1, or team-mates demoed) it is the
-    flip-chaser with that dodge. Stateless, lookup-table rows only (a lookup clone can copy it), one instance
+    flip-chaser with that dodge. At a kickoff the second car aims beside the ball, by the kickoff layout
+    (``rotation.kickoff_aim``). Stateless, lookup-table rows only (a lookup clone can copy it), one instance
     plays any number of cars.
     """
 
@@ -225,10 +230,13 @@ class Rotator(ScriptedBot):
         view = rotation.team_view(agent, state)
         roles = rotation.assign_roles(view, state.last_touch)
         role = roles.get(agent, Role.FIRST)
+        pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
+        if role is Role.FIRST and car.on_ground and rotation.is_kickoff(view):
+            speed = float(team_frame(agent, car.vel) @ rot[:, 0])
+            return self.chaser.kickoff_run(pos, rot, speed, rotation.kickoff_aim(view, agent))
         if role is Role.FIRST or rotation.follow_up(view, roles) == agent:
             dodge = self._finish_dodge(agent, state, view) or self._shot_dodge(agent, state, view)
             return dodge or self.chaser.controls(agent, state)
-        pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         ball = rotation.ball_ahead(view)
         if role is Role.LAST:
             behind = rotation.LAST_BEHIND_2V2_UU if len(roles) <= 2 else rotation.LAST_BEHIND_UU
