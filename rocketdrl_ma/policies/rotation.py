@@ -69,15 +69,19 @@ class KickoffLane(Enum):
 #: bearings (deg off the long axis) that separate the kickoff lanes
 DIAGONAL_BEARING_DEG, OFF_CENTRE_BEARING_DEG = 20.0, 1.0
 #: how far beside the ball (uu along x, towards the car's own side when positive) the second kickoff taker aims, by
-#: the lanes of the first and second taker. Searched per layout against two flip-chasers, with the real 3 s
-#: countdown, over every 2v2 kickoff layout from both ends (README, "Team play"); aiming at the ball's centre as
-#: the first taker does, the second car's touch sends the ball towards a corner.
-KICKOFF_SECOND_AIM_UU: dict[tuple[KickoffLane, KickoffLane], float] = {
-    (KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -80.0,
-    (KickoffLane.DIAGONAL, KickoffLane.BACK): -200.0,
-    (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 300.0,
-    (KickoffLane.OFF_CENTRE, KickoffLane.BACK): -100.0,
-    (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): -200.0,
+#: team size (2; 3 and more) and the lanes of the first and second taker. Searched per layout against flip-chasers
+#: with the real 3 s countdown, over every 2v2 and 3v3 kickoff layout from both ends (README, "Team play"); aiming
+#: at the ball's centre as the first taker does, the second car's touch sends the ball towards a corner. With three
+#: or more cars the two nearest are never the back spot's.
+KICKOFF_SECOND_AIM_UU: dict[int, dict[tuple[KickoffLane, KickoffLane], float]] = {
+    2: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -80.0,
+        (KickoffLane.DIAGONAL, KickoffLane.BACK): -200.0,
+        (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 300.0,
+        (KickoffLane.OFF_CENTRE, KickoffLane.BACK): -100.0,
+        (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): -200.0},
+    3: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -40.0,
+        (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 300.0,
+        (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): 300.0},
 }
 
 
@@ -139,13 +143,15 @@ def kickoff_lane(pos: np.ndarray) -> KickoffLane:
 
 def kickoff_aim(view: TeamView, agent: str) -> np.ndarray:
     """Where ``agent``, a kickoff taker, drives at: the ball for the first, for the second beside it by
-    ``KICKOFF_SECOND_AIM_UU`` of its layout (towards its own side of the field's long axis when positive; a car on
-    the axis counts as on the +x side). The lanes are read from the cars' positions each decision."""
+    ``KICKOFF_SECOND_AIM_UU`` of its team size and layout (towards its own side of the field's long axis when
+    positive; a car on the axis counts as on the +x side). The lanes are read from the cars' positions each
+    decision."""
     order = kickoff_takers(view)
     if len(order) < 2 or agent != order[1]:
         return view.ball_pos
     pos = view.pos[agent]
-    aside_uu = KICKOFF_SECOND_AIM_UU.get((kickoff_lane(view.pos[order[0]]), kickoff_lane(pos)), 0.0)
+    by_layout = KICKOFF_SECOND_AIM_UU[min(len(order), 3)]
+    aside_uu = by_layout.get((kickoff_lane(view.pos[order[0]]), kickoff_lane(pos)), 0.0)
     side = math.copysign(1.0, pos[0]) if abs(pos[0]) > 1.0 else 1.0
     return view.ball_pos + np.array([side * aside_uu, 0.0, 0.0])
 
