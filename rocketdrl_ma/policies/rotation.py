@@ -18,9 +18,9 @@ Every car of a team works the roles out from the same state, so they agree witho
 A car that is not first and has to come back (its spot is behind it) takes an active boost pad on the way when it
 is short of boost and the pad costs little of a detour: the boost collected on the way back.
 
-At a kickoff the two nearest cars go. The second one aims beside the ball, by how far depends on the kickoff
-layout (``kickoff_aim``): it meets the ball just after the four-car collision at the centre and sends it on
-towards the opponents' goal, which their two cars, both at the centre, cannot cover.
+At a kickoff the two nearest cars go. The second one aims beside the ball, how far depending on the kickoff layout
+(``kickoff_aim``): it meets the ball just after the collision at the centre and sends it on towards the opponents'
+goal, which chasers who all went for the ball have left empty.
 """
 from __future__ import annotations
 
