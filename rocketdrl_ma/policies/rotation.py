@@ -161,12 +161,12 @@ def assign_roles(view: TeamView, last_touch: str | None) -> dict[str, Role]:
     At a kickoff the two nearest cars go: the nearer takes it, the other arrives just after it (``kickoff_aim``)."""
     if not view.agents:
         return {}
-    times = {a: arrival_s(view.pos[a], view.vel[a], view.ball_pos) for a in view.agents}
     if is_kickoff(view):
         by_time = kickoff_takers(view)
         takers = by_time[:KICKOFF_TAKERS]
         others = sorted(by_time[KICKOFF_TAKERS:], key=lambda a: (view.pos[a][1], a))
         return {**{a: Role.FIRST for a in takers}, **{a: Role.LAST if k == 0 else Role.SECOND for k, a in enumerate(others)}}
+    times = {a: arrival_s(view.pos[a], view.vel[a], view.ball_pos) for a in view.agents}
     if last_touch in times and float(np.linalg.norm(view.pos[last_touch] - view.ball_pos)) < KEEP_ROLE_WITHIN_UU:
         times[last_touch] -= KEEP_ROLE_BONUS_S
     first = min(view.agents, key=lambda a: (times[a], a))

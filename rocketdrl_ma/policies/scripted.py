@@ -230,13 +230,14 @@ class Rotator(ScriptedBot):
         view = rotation.team_view(agent, state)
         roles = rotation.assign_roles(view, state.last_touch)
         role = roles.get(agent, Role.FIRST)
-        pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         if role is Role.FIRST and car.on_ground and rotation.is_kickoff(view):
-            speed = float(team_frame(agent, car.vel) @ rot[:, 0])
-            return self.chaser.kickoff_run(pos, rot, speed, rotation.kickoff_aim(view, agent))
+            rot = _team_rot(agent, car.rot_mat)
+            return self.chaser.kickoff_run(view.pos[agent], rot, float(view.vel[agent] @ rot[:, 0]),
+                                           rotation.kickoff_aim(view, agent))
         if role is Role.FIRST or rotation.follow_up(view, roles) == agent:
             dodge = self._finish_dodge(agent, state, view) or self._shot_dodge(agent, state, view)
             return dodge or self.chaser.controls(agent, state)
+        pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         ball = rotation.ball_ahead(view)
         if role is Role.LAST:
             behind = rotation.LAST_BEHIND_2V2_UU if len(roles) <= 2 else rotation.LAST_BEHIND_UU
