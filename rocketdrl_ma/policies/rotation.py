@@ -1,19 +1,24 @@
 """Team rotation as Rocket League players play it: who challenges, who supports, who covers the goal, and where
 the cars that are not on the ball go. Pure functions of the game state, in a team's frame (the team attacks +y).
 
-Every car of a team works the roles out from the same state, so they agree without talking to each other:
+Every car of a team works the roles out from the same state, so they agree without talking to each other. Outside
+kickoffs two cars rotate, the two lowest-numbered live ones (a demoed car's place passes to the next); in 3v3 and
+4v4 the others press:
 
-- **first man**: the car that reaches the ball soonest from its own side of it (a car upfield of the ball has to
-  come back around it first, and pays for that); the last toucher keeps the role while it is near the ball, so two
-  cars at about the same distance do not swap it every decision.
-- **follow-up**: one more car goes for the ball: of the others, the one that would reach it soonest, when it is
-  goal-side of the ball (it comes at the ball from behind, facing the opponents' goal) and, with three or more
-  cars, not the last man. It arrives just after the first man and takes the 50-50 or the loose ball he leaves:
-  one car on the ball against two chasers loses most challenges, two staggered cars win them. A car upfield of
-  the ball never follows up; it rotates back instead.
-- **last man**: of the others, the one nearest its own goal; it stands on the line from its goal's centre to the
-  ball, in the net when the ball is in its third, further out while the ball is away.
-- **second man** (3v3 and 4v4: everyone between): behind the ball towards the middle, ready for the follow-up.
+- **first man**: the rotating car that reaches the ball soonest from its own side of it (a car upfield of the ball
+  has to come back around it first, and pays for that); the last toucher keeps the role while it is near the
+  ball, so two cars at about the same distance do not swap it every decision.
+- **follow-up**: one more rotating car goes for the ball: of the others, the one that would reach it soonest, when
+  it is goal-side of the ball (it comes at the ball from behind, facing the opponents' goal) and, with three or
+  more rotating, not the last man. It arrives just after the first man and takes the 50-50 or the loose ball he
+  leaves: one car on the ball against two chasers loses most challenges, two staggered cars win them. A car
+  upfield of the ball never follows up; it rotates back instead.
+- **last man**: of the other rotating cars, the one nearest its own goal; it stands on the line from its goal's
+  centre to the ball, in the net when the ball is in its third, further out while the ball is away.
+- **second man** (rotating cars between, at a 4v4 kickoff): behind the ball towards the middle.
+- **presser**: plays the ball wherever it is, the flip-chaser's game with the shot dodge. With three rotating cars
+  a team lost most 3v3 and 4v4 matches to as many flip-chasers, whose pressure on the ball beat that of our first
+  man and follow-up; two rotating cars and pressers win most of them (README, "Team play").
 
 A car that is not first and has to come back (its spot is behind it) takes an active boost pad on the way when it
 is short of boost and the pad costs little of a detour: the boost collected on the way back.
@@ -31,7 +36,7 @@ from enum import Enum, IntEnum
 import numpy as np
 
 from rocketdrl_ma.physics import constants as C
-from rocketdrl_ma.rules.state import GameState, agent_team
+from rocketdrl_ma.rules.state import GameState, agent_number, agent_team
 
 OWN_GOAL_Y = -C.ARENA_EXTENT_Y
 #: the speed (uu/s) the arrival-time estimate assumes, and what a car upfield of the ball pays per uu it must come
@@ -41,10 +46,12 @@ WRONG_SIDE_COST_S = 0.6
 #: the last toucher keeps the first man's role while within this of the ball, at this head start
 KEEP_ROLE_WITHIN_UU, KEEP_ROLE_BONUS_S = 900.0, 0.35
 KICKOFF_TAKERS = 2  # cars that go for the ball at a kickoff
+ROTATING_CARS = 2  # cars that rotate outside kickoffs; the team's others are pressers
 FOLLOW_UP_GOAL_SIDE_UU = 300.0  # the follow-up car is at least this much nearer its own goal than the ball
 #: the second man's spot: this far behind the ball, its x pulled this much towards the middle
 SUPPORT_BACK_UU, SUPPORT_X_SHARE = 1900.0, 0.5
-#: the last man stays this far behind the ball on its way to goal: with one team-mate (2v2), with more
+#: the last man stays this far behind the ball on its way to goal: with one other rotating car (open play), with
+#: more (the cars that do not take a 3v3 or 4v4 kickoff)
 LAST_BEHIND_2V2_UU, LAST_BEHIND_UU = 1500.0, 2600.0
 GOAL_LINE_STAND_UU = 180.0  # how far in front of the goal line the last man stands at most
 #: boost on the way back: below this much boost, a pad within this detour (small pad, big pad)
@@ -56,6 +63,7 @@ class Role(IntEnum):
     FIRST = 0
     SECOND = 1
     LAST = 2
+    PRESSER = 3
 
 
 class KickoffLane(Enum):
@@ -158,30 +166,42 @@ def kickoff_aim(view: TeamView, agent: str) -> np.ndarray:
 
 def assign_roles(view: TeamView, last_touch: str | None) -> dict[str, Role]:
     """Every live team-mate's role; ties go to the lower agent name, so all team-mates reach the same answer.
-    At a kickoff the two nearest cars go: the nearer takes it, the other arrives just after it (``kickoff_aim``)."""
+    At a kickoff the two nearest cars go: the nearer takes it, the other arrives just after it (``kickoff_aim``);
+    of the others the deepest is the last man. Outside kickoffs the ``ROTATING_CARS`` lowest-numbered cars rotate
+    (first man, last man, second men between) and the others are pressers."""
     if not view.agents:
         return {}
     if is_kickoff(view):
         by_time = kickoff_takers(view)
         takers = by_time[:KICKOFF_TAKERS]
         others = sorted(by_time[KICKOFF_TAKERS:], key=lambda a: (view.pos[a][1], a))
-        return {**{a: Role.FIRST for a in takers}, **{a: Role.LAST if k == 0 else Role.SECOND for k, a in enumerate(others)}}
-    times = {a: arrival_s(view.pos[a], view.vel[a], view.ball_pos) for a in view.agents}
+        return {**{a: Role.FIRST for a in takers},
+                **{a: Role.LAST if k == 0 else Role.SECOND for k, a in enumerate(others)}}
+    by_number = sorted(view.agents, key=agent_number)
+    rotating = by_number[:ROTATING_CARS]
+    times = {a: arrival_s(view.pos[a], view.vel[a], view.ball_pos) for a in rotating}
     if last_touch in times and float(np.linalg.norm(view.pos[last_touch] - view.ball_pos)) < KEEP_ROLE_WITHIN_UU:
         times[last_touch] -= KEEP_ROLE_BONUS_S
-    first = min(view.agents, key=lambda a: (times[a], a))
-    others = sorted((a for a in view.agents if a != first), key=lambda a: (view.pos[a][1], a))
+    first = min(rotating, key=lambda a: (times[a], a))
+    others = sorted((a for a in rotating if a != first), key=lambda a: (view.pos[a][1], a))
     roles = {first: Role.FIRST}
     for k, a in enumerate(others):
         roles[a] = Role.LAST if k == 0 else Role.SECOND
-    return roles
+    return {**roles, **{a: Role.PRESSER for a in by_number[ROTATING_CARS:]}}
+
+
+def rotating_count(roles: dict[str, Role]) -> int:
+    """How many cars rotate (every car but the pressers)."""
+    return sum(1 for r in roles.values() if r is not Role.PRESSER)
 
 
 def follow_up(view: TeamView, roles: dict[str, Role]) -> str | None:
-    """The car that goes for the ball after the first man (None: no car does): of the cars not first, the one that
-    would reach the ball soonest, if it is goal-side of the ball by ``FOLLOW_UP_GOAL_SIDE_UU`` and, in a team of
-    three or more, not the last man (he keeps covering the goal). Every team-mate reaches the same answer."""
-    candidates = [a for a, r in roles.items() if r is not Role.FIRST and (len(roles) <= 2 or r is not Role.LAST)]
+    """The car that goes for the ball after the first man (None: no car does): of the rotating cars not first, the
+    one that would reach the ball soonest, if it is goal-side of the ball by ``FOLLOW_UP_GOAL_SIDE_UU`` and, with
+    three or more rotating, not the last man (he keeps covering the goal). Every team-mate reaches the same answer."""
+    rotating = rotating_count(roles)
+    candidates = [a for a, r in roles.items()
+                  if r not in (Role.FIRST, Role.PRESSER) and (rotating <= 2 or r is not Role.LAST)]
     if not candidates or is_kickoff(view):
         return None
     car = min(candidates, key=lambda a: (arrival_s(view.pos[a], view.vel[a], view.ball_pos), a))

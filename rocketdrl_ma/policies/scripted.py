@@ -201,15 +201,15 @@ class FlipChaser(ScriptedBot):
 
 
 class Rotator(ScriptedBot):
-    """A team player that rotates (``rotation.py``): the first man plays the flip-chaser's game on the ball, the
-    follow-up car (goal-side of the ball, the next to reach it) comes in behind him for the 50-50 and the loose
-    ball, the others support behind the ball and cover the goal; roles are worked out afresh from positions every
-    decision, identically by every team-mate, so at most two cars go for the ball. A car on the ball dodges into
-    a ground ball it is lined up to shoot (the flip-chaser dodges only at kickoffs): the harder hit wins the
-    challenge. Cars coming back take boost on the way. Alone on its team (1v1, or team-mates demoed) it is the
-    flip-chaser with that dodge. At a kickoff the second car aims beside the ball, by the kickoff layout
-    (``rotation.kickoff_aim``). Stateless, lookup-table rows only (a lookup clone can copy it), one instance
-    plays any number of cars.
+    """A team player that rotates (``rotation.py``): of the two rotating cars, the first man plays the flip-chaser's
+    game on the ball, the other follows up (goal-side of the ball, it comes in behind him for the 50-50 and the
+    loose ball) or covers the goal; in 3v3 and 4v4 the other cars press, playing the ball as the first man does.
+    Roles are worked out afresh from positions every decision, identically by every team-mate. A car on the ball
+    dodges into a ground ball it is lined up to shoot (the flip-chaser dodges only at kickoffs): the harder hit
+    wins the challenge. Cars coming back take boost on the way. Alone on its team (1v1, or team-mates demoed) it
+    is the flip-chaser with that dodge. At a kickoff the second car aims beside the ball, by the kickoff layout
+    (``rotation.kickoff_aim``). Stateless, lookup-table rows only (a lookup clone can copy it), one instance plays
+    any number of cars.
     """
 
     bot_name = "rotator"
@@ -234,13 +234,13 @@ class Rotator(ScriptedBot):
             rot = _team_rot(agent, car.rot_mat)
             return self.chaser.kickoff_run(view.pos[agent], rot, float(view.vel[agent] @ rot[:, 0]),
                                            rotation.kickoff_aim(view, agent))
-        if role is Role.FIRST or rotation.follow_up(view, roles) == agent:
+        if role in (Role.FIRST, Role.PRESSER) or rotation.follow_up(view, roles) == agent:
             dodge = self._finish_dodge(agent, state, view) or self._shot_dodge(agent, state, view)
             return dodge or self.chaser.controls(agent, state)
         pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         ball = rotation.ball_ahead(view)
         if role is Role.LAST:
-            behind = rotation.LAST_BEHIND_2V2_UU if len(roles) <= 2 else rotation.LAST_BEHIND_UU
+            behind = rotation.LAST_BEHIND_2V2_UU if rotation.rotating_count(roles) <= 2 else rotation.LAST_BEHIND_UU
             spot = rotation.cover_spot(ball, behind)
         else:
             rank = sum(1 for a, r in roles.items() if r is Role.SECOND and a != agent and view.pos[a][1] > pos[1])

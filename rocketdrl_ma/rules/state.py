@@ -31,6 +31,12 @@ def agent_team(agent: str) -> int:
     return TEAM_NAMES.index(prefix)
 
 
+def agent_number(agent: str) -> int:
+    """``blue_0`` -> 0, ``orange_3`` -> 3: the car's number in its team."""
+    agent_team(agent)
+    return int(agent.rsplit("_", 1)[1])
+
+
 def agent_names(blue_size: int, orange_size: int) -> list[str]:
     return [f"blue_{i}" for i in range(blue_size)] + [f"orange_{i}" for i in range(orange_size)]
 
