@@ -17,8 +17,8 @@ kickoffs two cars rotate, the two lowest-numbered live ones (a demoed car's plac
   centre to the ball, in the net when the ball is in its third, further out while the ball is away.
 - **second man** (rotating cars between, at a 4v4 kickoff): behind the ball towards the middle.
 - **presser**: plays the ball wherever it is, the flip-chaser's game with the shot dodge. With three rotating cars
-  a team lost most 3v3 and 4v4 matches to as many flip-chasers, whose pressure on the ball beat that of our first
-  man and follow-up; two rotating cars and pressers win most of them (README, "Team play").
+  a team lost most 3v3 matches to three flip-chasers, whose pressure on the ball beat that of a first man and a
+  follow-up; two rotating cars and a presser win most of them (README, "Team play").
 
 A car that is not first and has to come back (its spot is behind it) takes an active boost pad on the way when it
 is short of boost and the pad costs little of a detour: the boost collected on the way back.
