@@ -50,13 +50,18 @@ $(BENCHMARL_STAMP): pyproject.toml
 browser:
 	command -v chromium >/dev/null || (apt-get update && apt-get install -y --no-install-recommends chromium)
 
+# Both suites on 2 pytest-xdist workers (the 2-core machine). loadgroup hands out one test at a time, but the tests of
+# one xdist_group (a module whose module fixtures are costly, the Ray tests) to one worker together.
+# `make test XDIST=` runs in one process.
+XDIST ?= -n 2 --dist loadgroup
+
 # The whole suite, slow-marked tests included: correctness is never skipped.
 test: $(STAMP) $(NODE_STAMP) browser $(BENCHMARL_STAMP)
-	$(PY) -m pytest -q -p no:cacheprovider tests
+	$(PY) -m pytest -q -p no:cacheprovider $(XDIST) tests
 
 # Everything but the tests marked slow, for quick local iteration.
 test-fast: $(STAMP) $(NODE_STAMP) browser
-	$(PY) -m pytest -q -m "not slow" tests
+	$(PY) -m pytest -q $(XDIST) -m "not slow" tests
 
 bench: $(STAMP)
 	$(PY) benchmarks/physics_speed.py

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import re
 import shutil
+import socket
 import subprocess
 import sys
 import tempfile
@@ -11,14 +12,22 @@ from pathlib import Path
 import psutil
 
 
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
 class LocalRayCluster:
     """A real Ray cluster on 127.0.0.1 (a head and ``nodes - 1`` more nodes, one CPU each; two by default),
     started with ``ray start`` and stopped by the PIDs of every process that carries its own temp folder or port."""
 
-    def __init__(self, port: int, nodes: int = 2):
+    def __init__(self, port: int | None = None, nodes: int = 2):
+        """``port``: the head's (GCS) port; default a free loopback port, so no other cluster on the machine (another
+        test process's, or one a user runs) is ever joined or disturbed."""
         # Ray's Unix sockets live under its temp folder, and a socket path may not exceed 107 bytes: pytest's
         # tmp_path is too deep, a fresh folder in the system's temp directory is not
-        self.port, self.temp = port, Path(tempfile.mkdtemp(prefix="ray"))
+        self.port, self.temp = port or free_port(), Path(tempfile.mkdtemp(prefix="ray"))
         self.ray = str(Path(sys.executable).with_name("ray"))
         common = ["--num-cpus=1", "--object-store-memory=150000000", "--disable-usage-stats",
                   "--node-ip-address=127.0.0.1"]

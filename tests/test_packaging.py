@@ -19,6 +19,9 @@ from pathlib import Path
 
 import pytest
 
+# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+pytestmark = pytest.mark.xdist_group("test_packaging")
+
 REPO = Path(__file__).resolve().parents[1]
 NOT_BUILT_FROM = {".git", ".venv", "runs", "build", "dist", "node_modules", "__pycache__", ".pytest_cache",
                   "results", "docs", "benchmarks", "tests"}

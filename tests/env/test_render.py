@@ -9,6 +9,9 @@ from rocketdrl_ma.physics import BallState, CarState, yaw_rot_mat
 from rocketdrl_ma.physics.car_config import PRESETS
 from rocketdrl_ma.rules.state import GameState, Obstacle
 
+# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+pytestmark = pytest.mark.xdist_group("test_render")
+
 
 def make_state(ball=(0.0, 0.0, 93.15), tick=0, **kw) -> GameState:
     cars = {"blue_0": CarState(pos=[-300.0, -900.0, 17.0], rot_mat=yaw_rot_mat(np.pi / 2)),

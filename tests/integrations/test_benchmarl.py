@@ -11,6 +11,9 @@ from pathlib import Path
 
 import pytest
 
+# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+pytestmark = pytest.mark.xdist_group("test_benchmarl")
+
 ROOT = Path(__file__).resolve().parents[2]
 BENCHMARL_PYTHON = ROOT / ".venv-benchmarl" / "bin" / "python"
 DRIVER = Path(__file__).with_name("benchmarl_run.py")

@@ -47,8 +47,9 @@ def test_a_league_on_two_processes_stores_the_sequential_results_and_ratings(tmp
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("ray")  # the tests that start a Ray cluster take turns on one xdist worker (`make test`)
 def test_a_league_on_a_ray_cluster_stores_the_sequential_results_and_ratings(tmp_path):
-    cluster = LocalRayCluster(port=6392)
+    cluster = LocalRayCluster()
     try:
         _sequential_and(tmp_path, ray=cluster.address)
     finally:

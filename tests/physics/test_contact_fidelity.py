@@ -21,7 +21,9 @@ import pytest
 
 import contact_scenes as cs
 
-pytestmark = pytest.mark.slow  # about 15 s for all grids on both simulators
+# slow: about 15 s for all grids on both simulators. `make test` runs the suite on 2 xdist workers: this module's tests
+# share one, so its module fixtures are made once
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_contact_fidelity")]
 
 
 def _families(scenes: list[cs.Scene]) -> dict[str, list[int]]:

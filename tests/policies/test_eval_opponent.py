@@ -14,6 +14,9 @@ from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.ppo.trainer import Probe
 
+# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+pytestmark = pytest.mark.xdist_group("test_eval_opponent")
+
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "policies" / "checkpoints"
 SHORT = {"action": "lookup", "observation": "team_relative", "timeout_s": 3.0}
 
