@@ -85,6 +85,16 @@ def test_4v4_two_cars_rotate_the_others_press_and_every_mate_agrees():
         assert rotation.follow_up(view, dict(reversed(list(roles.items())))) == rotation.follow_up(view, roles)
 
 
+def test_no_follow_up_and_no_presser_at_a_kickoff():
+    view = _view({"blue_0": (-2048.0, -2560.0), "blue_1": (2048.0, -2560.0)}, ball=(0.0, 0.0), ball_vel=(0.0, 0.0))
+    roles = rotation.assign_roles(view, None)
+    assert set(roles.values()) == {Role.FIRST} and rotation.follow_up(view, roles) is None
+    # 3v3: the two nearest take it and the third covers, whatever its number
+    view = _view({"blue_0": (0.0, -4608.0), "blue_1": (-2048.0, -2560.0), "blue_2": (256.0, -3840.0)}, ball=(0.0, 0.0),
+                 ball_vel=(0.0, 0.0))
+    assert rotation.assign_roles(view, None) == {"blue_0": Role.LAST, "blue_1": Role.FIRST, "blue_2": Role.FIRST}
+
+
 def test_the_presser_plays_as_a_rotator_alone_on_its_team():
     """Every decision of a 40 s 3v3 match outside kickoffs: the presser's controls are those of a rotator with no
     team-mates (the flip-chaser's game with the shot dodge), while the last man's often are not (he covers)."""
