@@ -51,8 +51,9 @@ browser:
 	command -v chromium >/dev/null || (apt-get update && apt-get install -y --no-install-recommends chromium)
 
 # One process by default. `make test XDIST="-n 2 --dist loadgroup"` runs on 2 pytest-xdist workers (loadgroup keeps
-# the tests of one xdist_group, a module with costly module fixtures or the Ray tests, on one worker); on the 2-core
-# machine the server and browser tests that must answer in real time then fail, their processes short of a core.
+# the tests of one xdist_group, a module with costly module fixtures or the Ray tests, on one worker). On the 2-core
+# machine that went no faster (35 % of the suite in 8 min) and failed 5 tests in its first fifth; runs under load
+# failed server tests whose bots must answer within the lockstep deadline, and browser tests.
 XDIST ?=
 
 # The whole suite, slow-marked tests included: correctness is never skipped.
