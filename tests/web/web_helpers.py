@@ -78,7 +78,6 @@ class Procs:
 
     def __init__(self):
         self.procs: list[Proc] = []
-        self.key_dirs: dict[str, Path] = {}  # endpoint -> the key dir of the server serving there
 
     def start(self, argv: list[str]) -> Proc:
         p = Proc(argv)
@@ -86,20 +85,15 @@ class Procs:
         return p
 
     def serve(self, tmp_path: Path, name: str = "web") -> tuple[Proc, str]:
-        """A server whose key and admin secret live in ``tmp_path`` (not the repository's runs/server/NAME, which
-        another test process may be creating at the same moment)."""
         endpoint = f"tcp/127.0.0.1:{free_port()}"
-        key_dir = tmp_path / "keys"
         p = self.start(cli("serve", "server/local.yaml", "--listen", endpoint, "--name", name, "--results",
-                           str(tmp_path / "results.sqlite"), "--key-dir", str(key_dir)))
+                           str(tmp_path / "results.sqlite")))
         p.line("serving", 60.0)
-        self.key_dirs[endpoint] = key_dir
         return p, endpoint
 
     def lobby(self, endpoint: str, server: str, *args: str) -> str:
         """``rocketdrl-ma lobby ARGS`` against the server (the command line is the stable client); its output."""
-        done = subprocess.run(cli("lobby", *args, "--connect", endpoint, "--server", server, "--key-dir",
-                                  str(self.key_dirs[endpoint])), cwd=REPO,
+        done = subprocess.run(cli("lobby", *args, "--connect", endpoint, "--server", server), cwd=REPO,
                               capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, done.stdout + done.stderr
         return done.stdout
