@@ -31,10 +31,10 @@ class LocalRayCluster:
         self.ray = str(Path(sys.executable).with_name("ray"))
         common = ["--num-cpus=1", "--object-store-memory=150000000", "--disable-usage-stats",
                   "--node-ip-address=127.0.0.1"]
-        subprocess.run([self.ray, "start", "--head", f"--port={port}", f"--temp-dir={self.temp}",
+        subprocess.run([self.ray, "start", "--head", f"--port={self.port}", f"--temp-dir={self.temp}",
                         "--include-dashboard=false", *common], check=True, capture_output=True, timeout=120)
         for _ in range(nodes - 1):
-            subprocess.run([self.ray, "start", f"--address=127.0.0.1:{port}", *common], check=True,
+            subprocess.run([self.ray, "start", f"--address=127.0.0.1:{self.port}", *common], check=True,
                            capture_output=True, timeout=120)
 
     @property
