@@ -8,7 +8,6 @@ from __future__ import annotations
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import sysconfig
@@ -19,7 +18,9 @@ from pathlib import Path
 
 import pytest
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+from ports import free_port
+
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_packaging")
 
 REPO = Path(__file__).resolve().parents[1]
@@ -31,12 +32,6 @@ def run(argv: list[str], cwd: Path, env: dict, timeout_s: float = 300.0) -> str:
     done = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout_s)
     assert done.returncode == 0, f"{argv} exited {done.returncode}:\n{done.stdout}\n{done.stderr}"
     return done.stdout
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 class Lines:

@@ -52,7 +52,7 @@ FOLLOW_UP_GOAL_SIDE_UU = 300.0  # the follow-up car is at least this much nearer
 SUPPORT_BACK_UU, SUPPORT_X_SHARE = 1900.0, 0.5
 #: the last man stays this far behind the ball on its way to goal: with one other rotating car (open play), with
 #: more (the cars that do not take a 3v3 or 4v4 kickoff)
-LAST_BEHIND_2V2_UU, LAST_BEHIND_UU = 1500.0, 2600.0
+LAST_BEHIND_PAIR_UU, LAST_BEHIND_UU = 1500.0, 2600.0
 GOAL_LINE_STAND_UU = 180.0  # how far in front of the goal line the last man stands at most
 #: boost on the way back: below this much boost, a pad within this detour (small pad, big pad)
 LOW_BOOST = 60.0

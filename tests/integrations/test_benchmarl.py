@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_benchmarl")
 
 ROOT = Path(__file__).resolve().parents[2]

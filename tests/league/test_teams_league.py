@@ -11,7 +11,7 @@ from rocketdrl_ma.league.report import entrant_team_metrics
 from rocketdrl_ma.league.schedule import schedule
 from rocketdrl_ma.policies.ppo import load_train_config
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_teams_league")
 
 

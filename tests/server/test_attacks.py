@@ -28,7 +28,7 @@ from rocketdrl_ma.server import PolicyBot, ServerError, Spectator
 from rocketdrl_ma.server.client import LobbyClient, trusted_server_key
 from rocketdrl_ma.server.spectator import MatchEnd, StateUpdate
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_attacks")
 
 FORGED_ROLL = 1.0  # the hostile's forged action rolls; scripted bots never roll

@@ -12,7 +12,7 @@ from rocketdrl_ma.env.replay import load_replay
 from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.results import ResultsStore
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_cli")
 
 GAME = ["--set", "clock_s=4", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=1"]

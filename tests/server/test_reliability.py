@@ -20,7 +20,7 @@ from rocketdrl_ma.server import LobbyClient, ServerError
 from rocketdrl_ma.server.crypto import random_bytes
 from rocketdrl_ma.server.protocol import PROTOCOL_VERSION, action_message, open_sealed, pack
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_reliability")
 
 NEUTRAL = np.array([0, 0, 0, 0, 0, -1, -1, -1], np.float32)

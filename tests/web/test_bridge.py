@@ -13,7 +13,7 @@ from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.web.training import TrainingBroadcast
 from web_helpers import PageSocket, Procs, cli, wait_for
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_bridge")]
 MAX_STATES_PER_S = 30
 MAX_4V4_FRAME_BYTES = 2000

@@ -13,7 +13,7 @@ from PIL import Image
 from rocketdrl_ma.env.replay import load_replay
 from web_helpers import PageSocket, Procs, launch_chromium, wait_for, write_replay
 
-# `make test` runs the suite on 2 xdist workers: this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
 VIEWPORT = {"width": 1280, "height": 720}
 #: 2v2 ball-chasers, seed 0: blue scores after about 6.5 s of game, nobody after; the clock ends at 8 s
