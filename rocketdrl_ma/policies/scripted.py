@@ -12,7 +12,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from rocketdrl_ma.physics import CarControls
+from rocketdrl_ma.physics import CarControls, CarState
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, agent_team
 from rocketdrl_ma.validation import check_name
@@ -163,8 +163,8 @@ class FlipChaser(ScriptedBot):
         ball, ball_vel = team_frame(agent, state.ball.pos), team_frame(agent, state.ball.vel)
         speed = float(vel @ rot[:, 0])
         kickoff = abs(ball[0]) < 1.0 and abs(ball[1]) < 1.0 and float(np.linalg.norm(ball_vel)) < 1.0
-        if car.on_ground and rot[2, 2] < 0.5 and float(np.linalg.norm(vel)) < 200.0:
-            return _air_row(jump=True)  # on its side against a wall: wheels on the wall, driving cannot free it
+        if _on_its_side_against_a_wall(car):
+            return _air_row(jump=True)
         if kickoff and not car.on_ground and car.has_jumped and not car.has_flipped:
             # the dodge needs a fresh press: release the held jump first, then press it with pitch
             return _ground_row(1.0, 0.0) if car.is_jumping else _air_row(pitch=-1.0, jump=True)
@@ -227,6 +227,8 @@ class Rotator(ScriptedBot):
         car = state.cars[agent]
         if car.is_demoed:
             return CarControls()
+        if _on_its_side_against_a_wall(car):  # in every role: a covering car stuck there sat out whole matches
+            return _air_row(jump=True)
         view = rotation.team_view(agent, state)
         roles = rotation.assign_roles(view, state.last_touch)
         role = roles.get(agent, Role.FIRST)
@@ -299,6 +301,12 @@ class Idle(ScriptedBot):
 
 def _team_rot(agent: str, rot: np.ndarray) -> np.ndarray:
     return rot if agent_team(agent) == 0 else np.diag([-1.0, -1.0, 1.0]) @ rot
+
+
+def _on_its_side_against_a_wall(car: CarState) -> bool:
+    """Wheels on a wall (a net's side, the arena's), body level with the floor, standing: driving cannot free the
+    car, a jump off the wall can."""
+    return car.on_ground and car.rot_mat[2, 2] < 0.5 and float(np.linalg.norm(car.vel)) < 200.0
 
 
 def _ground_row(throttle: float, steer: float, boost: bool = False, handbrake: bool = False) -> CarControls:

@@ -158,6 +158,28 @@ def test_the_rotator_dodges_into_a_shot_and_hits_harder_than_the_flip_chaser():
     assert min(gains) > 0.0 and np.mean(gains) > 400.0, gains
 
 
+@pytest.mark.parametrize("size, net_wall_x", [(2, -876.0), (3, 876.0)])
+def test_the_last_man_lying_on_its_side_against_a_net_wall_jumps_off_it(size, net_wall_x):
+    """Found in a full 3v3 match (seed 8100): the last man, on its side against a side wall of the opponents' net
+    (wheels on the wall, nose up), reversed into the floor for the match's last 80 s. The flip-chaser's jump off a
+    wall is now every role's: within 3 s the car is back on its wheels and on its way to its own half."""
+    m = Match(team_size=size, kickoff_countdown_s=0.0)
+    m.reset(np.random.default_rng(0))
+    wall_up = np.array([-math.copysign(1.0, net_wall_x), 0.0, 0.0])
+    nose_up = np.array([0.0, 0.0, 1.0])
+    on_its_side = np.column_stack((nose_up, np.cross(wall_up, nose_up), wall_up))  # forward, right, up
+    m.cars["blue_0"].set_state(CarState(pos=np.array([net_wall_x, 5484.0, 46.0]), rot_mat=on_its_side, on_ground=True))
+    m.arena.ball.set_state(BallState(pos=np.array([500.0, -2500.0, 93.0])))
+    rotator, idle = make_scripted("rotator"), make_scripted("idle")
+    state = m.game_state()
+    assert rotation.assign_roles(rotation.team_view("blue_0", state), None)["blue_0"] is Role.LAST
+    for _ in range(45):
+        state = m.game_state()
+        m.advance({a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}, 8)
+    car = m.game_state().cars["blue_0"]
+    assert car.rot_mat[2, 2] > 0.9 and car.on_ground and car.pos[1] < 4400.0, (car.pos, car.rot_mat[:, 2])
+
+
 @pytest.mark.parametrize("size", [2, 3])
 def test_rotator_controls_are_rows_of_the_lookup_table(size):
     """Every decision of a team of rotators against flip-chasers (kickoff and shot dodges included) survives
