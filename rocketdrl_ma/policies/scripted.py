@@ -28,7 +28,6 @@ OWN_GOAL = np.array([0.0, -C.ARENA_EXTENT_Y, 0.0])
 REVERSE_ANGLE_RAD, REVERSE_WITHIN_UU = 2.2, 1500.0
 BOOST_ANGLE_RAD, BOOST_BEYOND_UU = 0.25, 800.0
 SLIDE_ANGLE_RAD = 1.3
-CORNER_BALL_FAR_UU = 1500.0  # a car nosed into a goal corner's step backs off only with the ball this far away
 
 
 def team_frame(agent: str, vec: np.ndarray) -> np.ndarray:
@@ -230,7 +229,7 @@ class Rotator(ScriptedBot):
             return CarControls()
         if _on_its_side_against_a_wall(car):  # in every role: a covering car stuck there sat out whole matches
             return _air_row(jump=True)
-        if _nose_at_a_goal_corner(car, state.ball.pos):
+        if _nose_at_a_goal_corner(car):
             return _ground_row(-1.0, 0.0)
         view = rotation.team_view(agent, state)
         roles = rotation.assign_roles(view, state.last_touch)
@@ -312,19 +311,16 @@ def _on_its_side_against_a_wall(car: CarState) -> bool:
     return car.on_ground and car.rot_mat[2, 2] < 0.5 and float(np.linalg.norm(car.vel)) < 200.0
 
 
-def _nose_at_a_goal_corner(car: CarState, ball_pos: np.ndarray) -> bool:
-    """Beside a goal mouth (past a post, within the ramp's width), the ball far, facing the back wall with the nose
-    at it and standing, or backing off from there until the nose is 300 uu out. The ramp begins there with its cut
-    face, a step the wheels cannot climb: a car driving on into it (to turn round for a target behind it) never
-    moves. With the ball near, the car stays in the scramble."""
+def _nose_at_a_goal_corner(car: CarState) -> bool:
+    """Facing a back wall beside a goal mouth (past a post, within the ramp's width), nose within 300 uu of the wall
+    and not driving away from it: the ramp begins there with its cut face, a step the wheels cannot climb, and a
+    car driving on into it (to turn round for a target behind it) never moves. Backing off until the nose is 300 uu
+    out frees it."""
     forward = car.rot_mat[:, 0]
-    if not (car.on_ground and forward[1] * math.copysign(1.0, car.pos[1]) > 0.7
-            and float(np.hypot(*(ball_pos - car.pos)[:2])) > CORNER_BALL_FAR_UU
-            and C.GOAL_HALF_WIDTH - 30.0 < abs(car.pos[0]) < C.GOAL_HALF_WIDTH + C.ARENA_FILLET_RADIUS):
-        return False
-    nose_out_uu = C.ARENA_EXTENT_Y - abs(car.pos[1] + forward[1] * 120.0)
-    forward_speed = float(car.vel @ forward)
-    return (nose_out_uu < 20.0 and abs(forward_speed) < 50.0) or (nose_out_uu < 300.0 and forward_speed < -50.0)
+    facing_wall = forward[1] * math.copysign(1.0, car.pos[1]) > 0.7
+    nose_y = abs(car.pos[1] + forward[1] * 120.0)
+    return (car.on_ground and facing_wall and nose_y > C.ARENA_EXTENT_Y - 300.0 and float(car.vel @ forward) < 300.0
+            and C.GOAL_HALF_WIDTH - 30.0 < abs(car.pos[0]) < C.GOAL_HALF_WIDTH + C.ARENA_FILLET_RADIUS)
 
 
 def _ground_row(throttle: float, steer: float, boost: bool = False, handbrake: bool = False) -> CarControls:
