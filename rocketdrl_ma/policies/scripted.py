@@ -229,8 +229,6 @@ class Rotator(ScriptedBot):
             return CarControls()
         if _on_its_side_against_a_wall(car):  # in every role: a covering car stuck there sat out whole matches
             return _air_row(jump=True)
-        if _nose_at_a_goal_corner(car):
-            return _ground_row(-1.0, 0.0)
         view = rotation.team_view(agent, state)
         roles = rotation.assign_roles(view, state.last_touch)
         role = roles.get(agent, Role.FIRST)
@@ -309,18 +307,6 @@ def _on_its_side_against_a_wall(car: CarState) -> bool:
     """Wheels on a wall (a net's side, the arena's), body level with the floor, standing: driving cannot free the
     car, a jump off the wall can."""
     return car.on_ground and car.rot_mat[2, 2] < 0.5 and float(np.linalg.norm(car.vel)) < 200.0
-
-
-def _nose_at_a_goal_corner(car: CarState) -> bool:
-    """Facing a back wall beside a goal mouth (past a post, within the ramp's width), nose within 300 uu of the wall
-    and not driving away from it: the ramp begins there with its cut face, a step the wheels cannot climb, and a
-    car driving on into it (to turn round for a target behind it) never moves. Backing off until the nose is 300 uu
-    out frees it."""
-    forward = car.rot_mat[:, 0]
-    facing_wall = forward[1] * math.copysign(1.0, car.pos[1]) > 0.7
-    nose_y = abs(car.pos[1] + forward[1] * 120.0)
-    return (car.on_ground and facing_wall and nose_y > C.ARENA_EXTENT_Y - 300.0 and float(car.vel @ forward) < 300.0
-            and C.GOAL_HALF_WIDTH - 30.0 < abs(car.pos[0]) < C.GOAL_HALF_WIDTH + C.ARENA_FILLET_RADIUS)
 
 
 def _ground_row(throttle: float, steer: float, boost: bool = False, handbrake: bool = False) -> CarControls:

@@ -180,23 +180,6 @@ def test_the_last_man_lying_on_its_side_against_a_net_wall_jumps_off_it(size, ne
     assert car.rot_mat[2, 2] > 0.9 and car.on_ground and car.pos[1] < 4400.0, (car.pos, car.rot_mat[:, 2])
 
 
-@pytest.mark.parametrize("size, agent, post_x", [(2, "blue_0", 934.0), (3, "blue_2", -934.0)])
-def test_a_car_nosed_into_the_step_beside_its_goal_backs_off(size, agent, post_x):
-    """Found in full 3v3 matches: a car just past a post, facing its own back wall, its target far behind it,
-    drives on into the ramp's cut face there to turn round and never moves (a presser for 18 s). The last man (2v2)
-    and the presser (3v3) now back off first: 4 s later each is well on its way up the field."""
-    m = Match(team_size=size, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(0))
-    m.cars[agent].set_state(CarState(pos=np.array([post_x, -5046.0, 17.0]), rot_mat=yaw_rot_mat(-np.pi / 2),
-                                     on_ground=True))
-    m.arena.ball.set_state(BallState(pos=np.array([0.0, 2000.0, 93.0])))
-    rotator, idle = make_scripted("rotator"), make_scripted("idle")
-    for _ in range(60):
-        state = m.game_state()
-        m.advance({a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}, 8)
-    assert m.game_state().cars[agent].pos[1] > -3500.0  # measured: -2239 and -2236; stuck at -5046 before
-
-
 @pytest.mark.parametrize("size", [2, 3])
 def test_rotator_controls_are_rows_of_the_lookup_table(size):
     """Every decision of a team of rotators against flip-chasers (kickoff and shot dodges included) survives
