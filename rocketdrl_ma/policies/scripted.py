@@ -219,6 +219,9 @@ class Rotator(ScriptedBot):
     #: at least this; the ball on the ground, straight ahead, and the car behind it towards the opponents' goal
     DODGE_LEAD_S, DODGE_MIN_CLOSING_UU_S = 0.22, 500.0
     DODGE_MAX_BALL_Z_UU, DODGE_AIM_RAD, DODGE_MIN_SHOT_COS = 160.0, 0.35, 0.5
+    #: a car in any role on its side against a wall and slower than this jumps off it (on the ball, the flip-chaser's
+    #: rule jumps below 200 uu/s): a covering car that slows on a side wall on its way back drives on down
+    STANDING_UU_S = 30.0
 
     def __init__(self) -> None:
         self.chaser = FlipChaser()
@@ -227,7 +230,7 @@ class Rotator(ScriptedBot):
         car = state.cars[agent]
         if car.is_demoed:
             return CarControls()
-        if _on_its_side_against_a_wall(car):  # in every role: a covering car stuck there sat out whole matches
+        if _on_its_side_against_a_wall(car, self.STANDING_UU_S):  # a covering car stuck there sat out 80 s
             return _air_row(jump=True)
         view = rotation.team_view(agent, state)
         roles = rotation.assign_roles(view, state.last_touch)
@@ -303,10 +306,10 @@ def _team_rot(agent: str, rot: np.ndarray) -> np.ndarray:
     return rot if agent_team(agent) == 0 else np.diag([-1.0, -1.0, 1.0]) @ rot
 
 
-def _on_its_side_against_a_wall(car: CarState) -> bool:
-    """Wheels on a wall (a net's side, the arena's), body level with the floor, standing: driving cannot free the
-    car, a jump off the wall can."""
-    return car.on_ground and car.rot_mat[2, 2] < 0.5 and float(np.linalg.norm(car.vel)) < 200.0
+def _on_its_side_against_a_wall(car: CarState, below_uu_s: float = 200.0) -> bool:
+    """Wheels on a wall (a net's side, the arena's), body level with the floor, slower than ``below_uu_s``: driving
+    cannot free a car standing there, a jump off the wall can."""
+    return car.on_ground and car.rot_mat[2, 2] < 0.5 and float(np.linalg.norm(car.vel)) < below_uu_s
 
 
 def _ground_row(throttle: float, steer: float, boost: bool = False, handbrake: bool = False) -> CarControls:
