@@ -134,14 +134,13 @@ def test_killed_league_resumes_without_losing_or_duplicating(tmp_path):
     ("leagues/selfplay_kickstart_vs_ball_chaser.yaml", "selfplay_kickstart", "ball_chaser"),
     pytest.param("leagues/selfplay_2v2_from_1v1_vs_ball_chaser.yaml", "selfplay_2v2_from_1v1", "ball_chaser",
                  marks=pytest.mark.slow),
-    pytest.param("leagues/selfplay_2v2_from_1v1_vs_rotator.yaml", "selfplay_2v2_from_1v1", "rotator",
-                 marks=pytest.mark.slow),
     pytest.param("leagues/selfplay_3v3_from_2v2_vs_ball_chaser.yaml", "selfplay_3v3_from_2v2", "ball_chaser",
                  marks=pytest.mark.slow)])
 def test_a_delivered_policy_wins_its_first_league_match_on_either_side(league_yaml, trained, opponent):
     """A committed self-play checkpoint (1v1, the 2v2 and 3v3 teams) in the first two full 5-minute matches of its
     league (one per side): a change to physics, observations or the lookup table that breaks what it learned shows
-    up here. (The 3v3 rotators, about 60 % against flip-chasers, are no case for a win in any given match.)"""
+    up here. Against the ball-chasers only: against the rotators (the trained 2v2 team wins about 70 % of its matches,
+    the 3v3 rotators about 60 % against flip-chasers) a change to the scripted team flips single matches."""
     cfg = load_league_config(REPO / league_yaml)
     first_two = schedule(cfg)[:2]
     assert {m.blue for m in first_two} == {trained, opponent}
