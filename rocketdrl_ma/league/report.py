@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from rocketdrl_ma.results import MatchResult
+from rocketdrl_ma.rules import agent_number
 
 from .config import LeagueConfig
 from .ratings import LeagueTable
@@ -57,7 +58,7 @@ def entrant_team_metrics(cfg: LeagueConfig, results: list[MatchResult]) -> dict[
             if metrics.get("mean_teammate_distance_uu") is not None:
                 row.distances_uu.append(float(metrics["mean_teammate_distance_uu"]))
             shares = metrics.get("last_back_share", {})
-            row.last_back.append([shares[slot] for slot in sorted(shares, key=lambda s: int(s.rsplit("_", 1)[1]))])
+            row.last_back.append([shares[slot] for slot in sorted(shares, key=agent_number)])
     return out
 
 

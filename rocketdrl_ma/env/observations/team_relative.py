@@ -11,7 +11,7 @@ from gymnasium import spaces
 from rocketdrl_ma.physics import ArenaBatch
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.physics.state import CarState
-from rocketdrl_ma.rules.state import BLUE, GameState, TEAM_NAMES, agent_team
+from rocketdrl_ma.rules.state import BLUE, GameState, TEAM_NAMES, agent_number, agent_team
 
 from .base import (BALL_ANG_VEL_SCALE, BALL_VEL_SCALE, CAR_ANG_VEL_SCALE, CAR_VEL_SCALE, CLOCK_SCALE_S, MIRROR, N_PADS,
                    ObsBuilder, PAD_COOLDOWN, PAD_MIRROR, POS_SCALE, SCORE_DIFF_SCALE, box_space, check_sizes,
@@ -140,7 +140,7 @@ class TeamRelativeObs(ObsBuilder):
         sizes = [0, 0]
         for name in list(state.cars) + list(state.last_controls) + list(state.car_configs):
             team = agent_team(name)
-            sizes[team] = max(sizes[team], int(name.rsplit("_", 1)[1]) + 1)
+            sizes[team] = max(sizes[team], agent_number(name) + 1)
         return sizes[0], sizes[1]
 
     def _layout(self, agent: str, blue_size: int, orange_size: int) -> tuple[tuple[tuple[int, str], ...], int, int]:
@@ -150,7 +150,7 @@ class TeamRelativeObs(ObsBuilder):
         if key not in self._layouts:
             team = agent_team(agent)
             own_size, other_size = (blue_size, orange_size) if team == BLUE else (orange_size, blue_size)
-            index = int(agent.rsplit("_", 1)[1])
+            index = agent_number(agent)
             if not 0 <= index < own_size:
                 raise ValueError(f"agent: {agent!r} is not in a {blue_size}v{orange_size} game")
             self._make_space(blue_size, orange_size)
@@ -177,7 +177,7 @@ class TeamRelativeObs(ObsBuilder):
         # Every agent of one decision shares the per-car features and the team frames' blocks.
         if self._cached_state is not state or self._cached_sizes != (blue_size, orange_size):
             for name in state.cars:
-                t, i = agent_team(name), int(name.rsplit("_", 1)[1])
+                t, i = agent_team(name), agent_number(name)
                 if i >= (blue_size, orange_size)[t]:
                     raise ValueError(f"state.cars: {name!r} is not in a {blue_size}v{orange_size} game")
             self._cached_cars = {name: car_features(car) for name, car in state.cars.items()}
