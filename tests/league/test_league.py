@@ -7,6 +7,7 @@ import sqlite3
 import subprocess
 import sys
 import time
+from itertools import repeat
 from pathlib import Path
 
 import pytest
@@ -19,6 +20,7 @@ from rocketdrl_ma.league.report import write_report
 from rocketdrl_ma.league.runner import run_league
 from rocketdrl_ma.league.schedule import schedule
 from rocketdrl_ma.results import ResultsStore
+from processes import two_processes
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -144,8 +146,9 @@ def test_a_delivered_policy_wins_its_first_league_match_on_either_side(league_ya
     cfg = load_league_config(REPO / league_yaml)
     first_two = schedule(cfg)[:2]
     assert {m.blue for m in first_two} == {trained, opponent}
-    for match in first_two:
-        result = play_local(cfg, match)
+    with two_processes() as pool:  # the matches are independent: one per core (the 3v3 pair took 88 s in one)
+        results = list(pool.map(play_local, repeat(cfg), first_two))
+    for match, result in zip(first_two, results):
         goals = {match.blue: result.score_blue, match.orange: result.score_orange}
         assert result.duration_s >= 300.0
         assert goals[trained] > goals[opponent], (match.key, goals)

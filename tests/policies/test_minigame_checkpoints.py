@@ -29,7 +29,7 @@ def test_a_shipped_minigame_checkpoint_scores(name):
     ("penalty_duel_shooter", "scripted:goalie"),
     ("penalty_duel_shooter", f"checkpoint:{CHECKPOINTS / 'penalty_duel_keeper.pt'}"),
     ("penalty_duel_keeper", f"checkpoint:{CHECKPOINTS / 'penalty_tuned.pt'}"),
-])
+], ids=lambda value: value.replace(str(CHECKPOINTS), "policies/checkpoints"))  # ids the same in any clone
 def test_a_penalty_duel_checkpoint_wins_against_its_opponents(name, opponent):
     """The shooter scores, the keeper saves, at least once in 6 episodes, each on the side it trained on."""
     result = evaluate_against(CHECKPOINTS / f"{name}.pt", opponent, episodes=6, seed=90_210, n_envs=2)

@@ -1,5 +1,7 @@
 """Scripted bots on real physics: the ball-chaser scores on an empty net; a full match produces goals; the
 flip-chaser scores, acts in lookup-table rows, wins kickoffs and beats the ball-chaser."""
+from itertools import repeat
+
 import numpy as np
 import pytest
 
@@ -7,6 +9,7 @@ import rocketdrl_ma
 from rocketdrl_ma.env.actions import LookupTableActions
 from rocketdrl_ma.policies.scripted import make_scripted
 from rocketdrl_ma.rules import Match
+from processes import two_processes
 
 
 def _play(blue: str, orange: str, clock_s: float, seed: int = 0) -> Match:
@@ -101,12 +104,12 @@ def _env_match(blue: str, orange: str, seed: int, action: str) -> tuple[int, int
 def test_flip_chaser_beats_the_ball_chaser(action):
     """Six full matches, sides alternating, with the config's continuous actions and through the lookup table:
     it wins 6 and 5 of them, 39-6 and 31-17 in goals; a ball-chaser in its place wins 2 of each, 20-22, 15-19."""
+    sides = [("flip_chaser", "ball_chaser") if seed % 2 == 0 else ("ball_chaser", "flip_chaser") for seed in range(6)]
+    with two_processes() as pool:  # six independent matches, three per core
+        scores = list(pool.map(_env_match, *zip(*sides), range(6), repeat(action)))
     wins, scored, conceded = 0, 0, 0
-    for seed in range(6):
-        flip_blue = seed % 2 == 0
-        blue, orange = _env_match(*(("flip_chaser", "ball_chaser") if flip_blue else ("ball_chaser", "flip_chaser")),
-                                  seed=seed, action=action)
-        mine, theirs = (blue, orange) if flip_blue else (orange, blue)
+    for (blue_bot, _), (blue, orange) in zip(sides, scores):
+        mine, theirs = (blue, orange) if blue_bot == "flip_chaser" else (orange, blue)
         wins += mine > theirs
         scored += mine
         conceded += theirs

@@ -2,6 +2,8 @@
 real training run through ``rocketdrl-ma train`` with a self-play YAML."""
 import json
 from dataclasses import replace
+from itertools import repeat
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +20,7 @@ from rocketdrl_ma.policies.ppo.rollout_policy import RolloutPolicy
 from rocketdrl_ma.policies.ppo.trainer import sync_controls, worker_config
 from rocketdrl_ma.policies.ppo.selfplay.games import SELF, SelfPlayGames
 from rocketdrl_ma.policies.ppo.selfplay.pool import OpponentPool
+from processes import two_processes
 
 # policies/selfplay_1v1.yaml cut down: 3 s matches (so episodes end and PFSP gets results), a tiny network
 TINY = {"env_overrides": {"clock_s": 3.0, "kickoff_countdown_s": 0.0, "overtime_limit_s": 1.0},
@@ -298,26 +301,34 @@ def test_teacher_labels_are_the_bots_rows_for_the_learners_cars_on_both_sides(tm
     games.close()
 
 
+def _short_run(tmp_path: Path, name: str, kickstart: dict) -> tuple[float, dict]:
+    """A short self-play run with the teacher term ``kickstart`` (or none), in a worker process: how often its
+    learner disagrees with the ball-chaser in the states it drives into itself, and the checkpoint's metrics."""
+    from rocketdrl_ma.policies.ppo.checkpoint import load_model
+
+    cfg_path = tmp_path / f"{name}.yaml"
+    cfg_path.write_text(json.dumps({
+        **load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY, "max_steps": 6144, "num_epoch": 8,
+        "batch_size": 64, "learning_rate": 1e-3, "hidden_units": 64, "features": "car_local",
+        "env_overrides": {**TINY["env_overrides"], "clock_s": 10.0, "action": "lookup"},
+        "selfplay": {**TINY["selfplay"], "kickstart": kickstart}}))
+    assert main(["train", str(cfg_path), "--run-dir", str(tmp_path / name), "--quiet"]) == 0
+    model, meta = load_model(tmp_path / name / "final.pt")
+    env_cfg = meta["env"]
+    obs, labels = collect(env_cfg["config"], env_cfg["overrides"], "ball_chaser", "ball_chaser", 400, 11, model,
+                          bot_share=0.0)
+    return disagreement(model, obs, labels), meta["metrics"]
+
+
 @pytest.mark.slow
 def test_kickstarting_pulls_the_learner_towards_the_teacher_on_its_own_states(tmp_path):
     """The same short run with and without the teacher term: only the kickstarted learner ends up taking
     the ball-chaser's rows in the states it drives into itself."""
-    from rocketdrl_ma.policies.ppo.checkpoint import load_model
-
-    far = {}
-    for name, kickstart in (("plain", {}), ("kickstart", {"bot": "ball_chaser", "weight": 5.0, "decay_steps": None})):
-        cfg_path = tmp_path / f"{name}.yaml"
-        cfg_path.write_text(json.dumps({
-            **load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **TINY, "max_steps": 6144, "num_epoch": 8,
-            "batch_size": 64, "learning_rate": 1e-3, "hidden_units": 64, "features": "car_local",
-            "env_overrides": {**TINY["env_overrides"], "clock_s": 10.0, "action": "lookup"},
-            "selfplay": {**TINY["selfplay"], "kickstart": kickstart}}))
-        assert main(["train", str(cfg_path), "--run-dir", str(tmp_path / name), "--quiet"]) == 0
-        model, meta = load_model(tmp_path / name / "final.pt")
-        env_cfg = meta["env"]
-        obs, labels = collect(env_cfg["config"], env_cfg["overrides"], "ball_chaser", "ball_chaser", 400, 11, model,
-                              bot_share=0.0)
-        far[name] = disagreement(model, obs, labels)
-        if kickstart:  # what training measured on its own states, in the checkpoint's metrics
-            assert 0.0 <= meta["metrics"]["teacher_disagreement"] < 1.0 and meta["metrics"]["teacher_weight"] == 5.0
+    kickstarts = {"plain": {}, "kickstart": {"bot": "ball_chaser", "weight": 5.0, "decay_steps": None}}
+    with two_processes() as pool:  # the two runs are independent: one per core
+        (far_plain, _), (far_kickstart, metrics) = pool.map(_short_run, repeat(tmp_path), kickstarts,
+                                                            kickstarts.values())
+    far = {"plain": far_plain, "kickstart": far_kickstart}
+    # what training measured on its own states, in the checkpoint's metrics
+    assert 0.0 <= metrics["teacher_disagreement"] < 1.0 and metrics["teacher_weight"] == 5.0
     assert far["kickstart"] < 0.6 * far["plain"], far
