@@ -6,7 +6,6 @@ truncations, events). Observation and action spaces are the same for every agent
 """
 from __future__ import annotations
 
-import functools
 import sys
 from pathlib import Path
 from typing import Any
@@ -122,11 +121,11 @@ class RocketDRLParallelEnv(ParallelEnv):
         state["_replay"] = None
         return state
 
-    @functools.lru_cache(maxsize=None)
+    # The same space object every call, as PettingZoo asks, without its docs' ``functools.lru_cache``: a cache on the
+    # method keys on ``self`` and so kept every env that was ever asked (and its PyBullet world) alive.
     def observation_space(self, agent: str) -> spaces.Box:
         return self._obs_space
 
-    @functools.lru_cache(maxsize=None)
     def action_space(self, agent: str) -> spaces.Space:
         return self._action_space
 

@@ -217,7 +217,7 @@ class Arena:
     def __init__(self, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
         batch = PhysicsWorld(1, tick_rate=tick_rate, seed=seed)
         self._init_view(batch, 0)
-        batch.arenas.append(self)
+        batch.attach_lone_arena(self)
 
     @classmethod
     def _view(cls, batch: PhysicsWorld, index: int) -> "Arena":

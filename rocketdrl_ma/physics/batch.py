@@ -16,4 +16,4 @@ class ArenaBatch(PhysicsWorld):
 
     def __init__(self, n_arenas: int = 1, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
         super().__init__(n_arenas, tick_rate=tick_rate, seed=seed)
-        self.arenas = [Arena._view(self, k) for k in range(n_arenas)]
+        self._arena_views = [Arena._view(self, k) for k in range(n_arenas)]
