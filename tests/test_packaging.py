@@ -154,24 +154,26 @@ def test_the_wheel_serves_the_web_page_with_its_own_three_js(installed):
 
 
 @pytest.mark.slow
-def test_the_wheel_serves_a_match_that_a_bot_plays(installed):
+def test_the_wheel_serves_a_match_that_two_bots_play(installed):
     bin_dir, elsewhere, env = installed
     cli = str(bin_dir / "rocketdrl-ma")
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     client = ["--server", "wheel", "--connect", endpoint]  # keys: runs/server/wheel in the working folder
     server = Lines([cli, "serve", "server/local.yaml", "--listen", endpoint, "--name", "wheel"], elsewhere, env)
-    bot = None
+    bots = []
     try:
         server.line("server key ed25519:", 120)
         created = run([cli, "lobby", "create", "matches/1v1.yaml", "--id", "M", "--ready-timeout", "60",
                        "--set", "clock_s=3", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=1",
                        *client], elsewhere, env, 120)
         tickets = dict(line.split()[1:3] for line in created.splitlines() if line.startswith("ticket "))
-        bot = Lines([cli, "bot", "--policy", "scripted:ball_chaser", "--match", "M", "--slot", "blue_0",
-                     "--ticket", tickets["blue_0"], *client], elsewhere, env)
-        assert bot.line("match M finished: blue ", 240)  # orange_0: the server's fill (scripted:ball_chaser)
-        assert bot.popen.wait(60) == 0
+        # a bot in every slot: the match starts once both have joined, not after the 60 s a server fill waits for
+        for slot, policy in (("blue_0", "scripted:ball_chaser"), ("orange_0", "scripted:goalie")):
+            bots.append(Lines([cli, "bot", "--policy", policy, "--match", "M", "--slot", slot,
+                               "--ticket", tickets[slot], *client], elsewhere, env))
+        for bot in bots:
+            assert bot.line("match M finished: blue ", 240)
+            assert bot.popen.wait(60) == 0
     finally:
-        for proc in (bot, server):
-            if proc is not None:
-                proc.stop()
+        for proc in (*bots, server):
+            proc.stop()
