@@ -6,6 +6,7 @@ from __future__ import annotations
 import copy
 import gc
 import pickle
+import tracemalloc
 import weakref
 
 import numpy as np
@@ -50,6 +51,22 @@ def test_a_dropped_match_disconnects_its_world_at_once():
         return match.arena
 
     assert _freed_when_dropped(make)
+
+
+def test_arenas_made_and_dropped_leave_no_python_memory_behind():
+    """PyBullet keeps a reference to every vertex row of a mesh it is given: with fresh lists for every world, each
+    arena left about 1.45 MB of Python floats behind."""
+    Arena(seed=0)  # the mesh lists and the kernels are made once per process
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        for seed in range(20):
+            Arena(seed=seed).add_car(team=seed % 2)
+        gc.collect()
+        grown_bytes = tracemalloc.get_traced_memory()[0] - before
+    finally:
+        tracemalloc.stop()
+    assert grown_bytes < 200_000, grown_bytes
 
 
 def test_a_lone_arena_is_its_worlds_one_view_in_copies_too():
