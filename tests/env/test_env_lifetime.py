@@ -23,10 +23,8 @@ def test_a_dropped_env_that_was_stepped_disconnects_its_world_at_once():
     gc.collect()
     gc.disable()
     try:
-        env = rocketdrl_ma.parallel_env("matches/2v2.yaml")
-        env.reset(seed=0)
+        env = _stepped_env()
         assert env.observation_space("blue_0") is env.observation_space("orange_1")
-        env.step({a: env.action_space(a).sample() for a in env.agents})
         world, client = weakref.ref(env.rules.arena.batch), env.rules.arena.batch.client
         env_ref = weakref.ref(env)
         del env
