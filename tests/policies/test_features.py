@@ -6,7 +6,8 @@ import torch
 from rocketdrl_ma.env.observations import CAR_ANG_VEL_SCALE
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.policies.ppo import load_train_config, validate_train_config
-from rocketdrl_ma.policies.ppo.features import LOCAL_DISTANCE_UU, LOCAL_SPEED_UU_S, CarLocal, make_features
+from rocketdrl_ma.policies.ppo.features import (LOCAL_DISTANCE_UU, LOCAL_SPEED_UU_S, N_BALL, N_CAR, PRESENT, CarLocal,
+                                                make_features)
 from rocketdrl_ma.policies.ppo.model import PPOModel
 
 
@@ -58,3 +59,25 @@ def test_car_local_needs_the_team_relative_observation_and_is_named_in_the_confi
     # the features' constants are not weights: checkpoints hold the same keys with and without them
     plain = PPOModel(87, {"kind": "discrete", "n": 90}, 16, 1, True)
     assert set(model.state_dict()) == set(plain.state_dict())
+
+
+def test_car_local_zeroes_empty_slots_and_rows_batched_equal_rows_alone():
+    """In a 2v3 every car's observation has one empty slot (present 0): its features are zeros. A batch of
+    observations gives each row exactly what the row gives alone: a league match (batch 1 per car) plays as the
+    trainer's batched rollouts see it."""
+    env = RocketDRLParallelEnv("matches/3v3.yaml", blue_size=2, orange_size=3, kickoff_countdown_s=0.0)
+    obs, _ = env.reset(seed=7)
+    features = CarLocal(env.observation_space("blue_0").shape[0])
+    rows = []
+    for _ in range(20):
+        rows += [obs[a] for a in env.agents]
+        obs, _, _, _, _ = env.step({a: env.action_space(a).sample() for a in env.agents})
+    env.close()
+    batch = torch.as_tensor(np.array(rows, np.float32))
+    out = features(batch)
+    assert all(torch.equal(out[i], features(batch[i:i + 1])[0]) for i in range(len(rows)))
+    slots = out[:, batch.shape[1] + 12:].reshape(len(rows), features.n_others, 6)
+    present = batch[:, [N_CAR + N_BALL + k * N_CAR + PRESENT for k in range(features.n_others)]]
+    assert torch.equal((present == 0).sum(1), torch.ones(len(rows)))  # blue's missing third car: one empty slot each
+    assert torch.count_nonzero(slots[present == 0]) == 0
+    assert torch.count_nonzero(slots[present == 1].abs().sum(-1)) == (present == 1).sum()

@@ -49,30 +49,39 @@ class CarLocal(nn.Module):
         self.n_others = others
         self.out_dim = obs_dim + OWN_LOCAL_FEATURES + OTHER_LOCAL_FEATURES * others
         self.register_buffer("pos_scale", torch.as_tensor(POS_SCALE, dtype=torch.float32), persistent=False)
+        # Every vector the features rotate is gathered in one indexing op and rotated in one batched product: as
+        # 4 + 2 x others separate products the features cost 1 ms a batch-1 call (3v3), 13 times the MLP's time.
+        others = [N_CAR + N_BALL + k * N_CAR for k in range(self.n_others)]
+        self.register_buffer("pos_index", _xyz([POS, N_CAR + BALL_POS] + [at + POS for at in others]),
+                             persistent=False)  # own car, ball, other cars
+        self.register_buffer("vel_index", _xyz([VEL] + [at + VEL for at in others]), persistent=False)
+        self.register_buffer("present_index", torch.tensor([at + PRESENT for at in others], dtype=torch.long),
+                             persistent=False)
+        scales = [LOCAL_DISTANCE_UU, LOCAL_SPEED_UU_S, LOCAL_SPEED_UU_S, 1.0]  # ang_vel keeps its [-1, 1] scale
+        scales += [LOCAL_DISTANCE_UU, LOCAL_SPEED_UU_S] * self.n_others
+        self.register_buffer("local_scale", torch.tensor(scales, dtype=torch.float32).view(1, -1, 1), persistent=False)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        def block(at: int, n: int = 3) -> torch.Tensor:
-            return obs[:, at:at + n]
-
-        pos, vel = block(POS) * self.pos_scale, block(VEL) * CAR_VEL_SCALE
-        forward, up = block(FORWARD), block(UP)
+        n, others = obs.shape[0], self.n_others
+        pos = obs[:, self.pos_index].view(n, 2 + others, 3) * self.pos_scale
+        vel = obs[:, self.vel_index].view(n, 1 + others, 3) * CAR_VEL_SCALE
+        ball_vel = obs[:, N_CAR + BALL_VEL:N_CAR + BALL_VEL + 3] * BALL_VEL_SCALE
+        forward, up = obs[:, FORWARD:FORWARD + 3], obs[:, UP:UP + 3]
         frame = torch.stack((forward, torch.linalg.cross(up, forward), up), dim=1)  # rows: forward, left, up
+        own_pos, own_vel = pos[:, :1], vel[:, :1]
+        per_other = torch.stack((pos[:, 2:] - own_pos, vel[:, 1:] - own_vel), dim=2).view(n, 2 * others, 3)
+        vectors = torch.cat((pos[:, 1:2] - own_pos, ball_vel.unsqueeze(1) - own_vel, own_vel,
+                             obs[:, ANG_VEL:ANG_VEL + 3].unsqueeze(1), per_other), dim=1)
+        local = torch.bmm(frame, vectors.transpose(1, 2)).transpose(1, 2)
+        # an empty slot (present 0) gets zeros; the own vectors are weighed by 1
+        present = obs[:, self.present_index].repeat_interleave(2, dim=1)
+        weight = torch.cat((torch.ones(n, 4, dtype=obs.dtype), present), dim=1).unsqueeze(2)
+        return torch.cat((obs, ((weight * local) / self.local_scale).reshape(n, -1)), dim=1)
 
-        def local(vec: torch.Tensor) -> torch.Tensor:
-            return torch.einsum("nij,nj->ni", frame, vec)
 
-        ball_pos = block(N_CAR + BALL_POS) * self.pos_scale
-        ball_vel = block(N_CAR + BALL_VEL) * BALL_VEL_SCALE
-        blocks = [obs,
-                  local(ball_pos - pos) / LOCAL_DISTANCE_UU, local(ball_vel - vel) / LOCAL_SPEED_UU_S,
-                  local(vel) / LOCAL_SPEED_UU_S, local(block(ANG_VEL))]  # ang_vel keeps its [-1, 1] scale
-        for k in range(self.n_others):
-            at = N_CAR + N_BALL + k * N_CAR
-            present = block(at + PRESENT, 1)
-            other_pos, other_vel = block(at + POS) * self.pos_scale, block(at + VEL) * CAR_VEL_SCALE
-            blocks += [present * local(other_pos - pos) / LOCAL_DISTANCE_UU,
-                       present * local(other_vel - vel) / LOCAL_SPEED_UU_S]
-        return torch.cat(blocks, dim=1)
+def _xyz(starts: list[int]) -> torch.Tensor:
+    """The observation indices of the 3-vectors that begin at ``starts``, in order."""
+    return torch.tensor([at + axis for at in starts for axis in range(3)], dtype=torch.long)
 
 
 def make_features(name: str, obs_dim: int) -> tuple[nn.Module | None, int]:
