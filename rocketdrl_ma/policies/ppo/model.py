@@ -7,14 +7,17 @@ its ``state_dict`` (normaliser statistics included) is the whole exported policy
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import torch
 from gymnasium import spaces
-from tensordict.nn import TensorDictModule
 from torch import nn
-from torchrl.modules import IndependentNormal, ProbabilisticActor, ValueOperator
 
 from .features import make_features
+
+if TYPE_CHECKING:
+    from torchrl.modules import ProbabilisticActor, ValueOperator
 
 NORM_CLIP = 5.0  # normalised observations are clipped to +-5 standard deviations, as in ML-Agents
 
@@ -112,7 +115,10 @@ class PPOModel(nn.Module):
 
     def td_modules(self) -> tuple[ProbabilisticActor, ValueOperator]:
         """torchrl views of the policy over normalised ``"observation"`` and of the value over ``critic_key``
-        (for ClipPPOLoss)."""
+        (for ClipPPOLoss). torchrl is imported here, not with the module: playing a checkpoint never needs it."""
+        from tensordict.nn import TensorDictModule
+        from torchrl.modules import IndependentNormal, ProbabilisticActor, ValueOperator
+
         if self.action["kind"] == "box":
             actor = ProbabilisticActor(
                 TensorDictModule(self.policy, in_keys=["observation"], out_keys=["loc", "scale"]),
