@@ -17,7 +17,7 @@ from rocketdrl_ma.policies.ppo import TrainConfig, load_train_config, train, val
 from rocketdrl_ma.policies.ppo.checkpoint import load_model
 from rocketdrl_ma.policies.ppo.rollout import RolloutEnv, worker_copies
 from rocketdrl_ma.policies.ppo.trainer import worker_config
-from rocketdrl_ma.policies.ppo.workers import WorkerPlan
+from rocketdrl_ma.policies.ppo.workers import Rollouts, WorkerPlan
 from ray_cluster import LocalRayCluster
 
 # policies/selfplay_1v1.yaml cut down: 3 s matches, a tiny network, a kickstart teacher so every key travels
@@ -54,6 +54,41 @@ def test_two_workers_give_the_same_losses_for_the_same_seed(tmp_path):
                   workers=WorkerPlan(2)).losses[:3] for k in range(2)]
     assert len(runs[0]) == 3 and runs[0] == runs[1]
     assert all(np.isfinite(v) for losses in runs[0] for v in losses.values())
+
+
+class _FailingOnce:
+    """A collector whose first batch fails with ``error``; a rebuilt one delivers."""
+
+    def __init__(self, error: Exception | None):
+        self.error, self.procs, self.stopped = error, [], False
+
+    def update_policy_weights_(self) -> None:
+        pass
+
+    def shutdown(self) -> None:
+        self.stopped = True
+
+    def __iter__(self):
+        if self.error is not None:
+            raise self.error
+        yield torch.zeros(4, 8)
+
+
+def test_torchrls_close_race_counts_as_a_worker_fault_and_other_value_errors_propagate(monkeypatch):
+    """torchrl, finding a dead worker, terminates the others and closes them 0.1 s later: on a loaded machine one is
+    still exiting and multiprocessing raises ValueError. That is the fault it found (the killed-worker test below hit
+    it under load): the workers are rebuilt. Any other ValueError is a bug and is raised."""
+    race = ValueError("Cannot close a process while it is still running. You should first call join() or terminate().")
+    for first_error, recovers in ((race, True), (ValueError("shape mismatch"), False)):
+        built = iter([_FailingOnce(first_error), _FailingOnce(None)])
+        rollouts = Rollouts(_selfplay_cfg(), policy=None, plan=WorkerPlan(n_workers=2), rows_per_copy=2)
+        monkeypatch.setattr(rollouts, "_build", lambda: next(built))
+        if recovers:
+            assert rollouts.next_batch().shape == (4, 8) and rollouts.restarts == 1
+        else:
+            with pytest.raises(ValueError, match="shape mismatch"):
+                rollouts.next_batch()
+            assert rollouts.restarts == 0
 
 
 def _start_training(tmp_path: Path, max_steps: int, workers: int = 2) -> tuple[subprocess.Popen, Path]:

@@ -27,6 +27,13 @@ from .rollout_policy import RolloutPolicy
 
 log = logging.getLogger(__name__)
 MAX_RESTARTS = 5
+#: what multiprocessing raises when torchrl, having found a dead worker, terminates the others and closes them 0.1 s
+#: later while one is still exiting (a loaded machine): a worker fault like the one it found
+_CLOSE_RACE = "Cannot close a process while it is still running"
+
+
+def _closing_a_live_worker(error: ValueError) -> bool:
+    return _CLOSE_RACE in str(error)
 
 
 def default_workers() -> int:
@@ -110,7 +117,9 @@ class Rollouts:
                 self._iterator = iter(self._collector)
             try:
                 batch = next(self._iterator)
-            except (RuntimeError, EOFError, BrokenPipeError, ConnectionError, OSError) as error:
+            except (RuntimeError, EOFError, BrokenPipeError, ConnectionError, OSError, ValueError) as error:
+                if isinstance(error, ValueError) and not _closing_a_live_worker(error):
+                    raise
                 self.restarts += 1
                 consecutive = getattr(self, "_consecutive", 0) + 1
                 self._consecutive = consecutive
