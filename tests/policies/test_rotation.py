@@ -264,10 +264,11 @@ def _kickoff_goals(team_size: int, second_aim_tables: list[dict], horizon_s: flo
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("team_size, at_least, at_most_against, margin", [(2, 18, 1, 10), (3, 14, 3, 20)])
+@pytest.mark.parametrize("team_size, at_least, at_most_against, margin", [(2, 18, 1, 10), (3, 8, 3, 20)])
 def test_the_rotators_kickoff_scores_where_aiming_at_the_ball_does_not(team_size, at_least, at_most_against, margin):
-    """Measured, scored - conceded within 15 s: 2v2 (40 kickoffs) 23 - 0, with both takers aiming at the ball's
-    centre 6 - 1; 3v3 (120 kickoffs, the presser playing from the first touch on) 16 - 2, at the centre 17 - 25."""
-    tuned, centre = _kickoff_goals(team_size, [rotation.KICKOFF_SECOND_AIM_UU, {2: {}, 3: {}}])
+    """Measured, scored - conceded within 12 s: 2v2 (40 kickoffs) 22 - 0, with both takers aiming at the ball's
+    centre 4 - 0; 3v3 (120 kickoffs, the presser playing from the first touch on) 10 - 1, at the centre 2 - 24.
+    (Within 15 s, the horizon the offsets were searched with: 23 - 0 and 6 - 1; 16 - 2 and 17 - 25.)"""
+    tuned, centre = _kickoff_goals(team_size, [rotation.KICKOFF_SECOND_AIM_UU, {2: {}, 3: {}}], horizon_s=12.0)
     assert tuned[0] >= at_least and tuned[1] <= at_most_against, tuned
     assert tuned[0] - tuned[1] >= centre[0] - centre[1] + margin, (tuned, centre)
