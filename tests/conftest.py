@@ -8,15 +8,15 @@ import pytest
 
 TESTS = Path(__file__).resolve().parent
 #: Tests whose outcome depends on wall-clock time: match servers with lockstep deadlines and real-time ticks, bots
-#: that must answer in time, a browser that must draw the live match at its rate. `make test` runs them on their own
-#: after the rest, which runs on two pytest-xdist workers; on a loaded core they missed deadlines. (The wheel's
-#: tests serve a match too, but only wait for it to finish.)
+#: that must answer in time, a browser that must draw the live match at its rate. `make test` runs them in one
+#: process at normal priority, beside the rest at the lowest priority on two pytest-xdist workers: beside a test of
+#: the same priority they missed deadlines. (The wheel's tests serve a match too, but only wait for it to finish.)
 WALL_CLOCK_TESTS = ("server", "web", "league/test_remote.py")
 
 
 def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line("markers", "wall_clock: depends on wall-clock time (WALL_CLOCK_TESTS); `make test` runs "
-                                       "these alone, after the rest")
+                                       "these at normal priority, the rest niced")
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

@@ -51,11 +51,11 @@ class CarLocal(nn.Module):
         self.register_buffer("pos_scale", torch.as_tensor(POS_SCALE, dtype=torch.float32), persistent=False)
         # Every vector the features rotate is gathered in one indexing op and rotated in one batched product: as
         # 4 + 2 x others separate products the features cost 1 ms a batch-1 call (3v3), 13 times the MLP's time.
-        others = [N_CAR + N_BALL + k * N_CAR for k in range(self.n_others)]
-        self.register_buffer("pos_index", _xyz([POS, N_CAR + BALL_POS] + [at + POS for at in others]),
+        other_blocks = [N_CAR + N_BALL + k * N_CAR for k in range(self.n_others)]
+        self.register_buffer("pos_index", _xyz([POS, N_CAR + BALL_POS] + [at + POS for at in other_blocks]),
                              persistent=False)  # own car, ball, other cars
-        self.register_buffer("vel_index", _xyz([VEL] + [at + VEL for at in others]), persistent=False)
-        self.register_buffer("present_index", torch.tensor([at + PRESENT for at in others], dtype=torch.long),
+        self.register_buffer("vel_index", _xyz([VEL] + [at + VEL for at in other_blocks]), persistent=False)
+        self.register_buffer("present_index", torch.tensor([at + PRESENT for at in other_blocks], dtype=torch.long),
                              persistent=False)
         scales = [LOCAL_DISTANCE_UU, LOCAL_SPEED_UU_S, LOCAL_SPEED_UU_S, 1.0]  # ang_vel keeps its [-1, 1] scale
         scales += [LOCAL_DISTANCE_UU, LOCAL_SPEED_UU_S] * self.n_others
@@ -75,7 +75,7 @@ class CarLocal(nn.Module):
         local = torch.bmm(frame, vectors.transpose(1, 2)).transpose(1, 2)
         # an empty slot (present 0) gets zeros; the own vectors are weighed by 1
         present = obs[:, self.present_index].repeat_interleave(2, dim=1)
-        weight = torch.cat((torch.ones(n, 4, dtype=obs.dtype), present), dim=1).unsqueeze(2)
+        weight = torch.cat((obs.new_ones((n, 4)), present), dim=1).unsqueeze(2)
         return torch.cat((obs, ((weight * local) / self.local_scale).reshape(n, -1)), dim=1)
 
 
