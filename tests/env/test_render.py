@@ -9,7 +9,7 @@ from rocketdrl_ma.physics import BallState, CarState, yaw_rot_mat
 from rocketdrl_ma.physics.car_config import PRESETS
 from rocketdrl_ma.rules.state import GameState, Obstacle
 
-# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_render")
 
 

@@ -47,7 +47,7 @@ def test_a_league_on_two_processes_stores_the_sequential_results_and_ratings(tmp
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("ray")  # the tests that start a Ray cluster share an xdist worker (`make test XDIST=...`)
+@pytest.mark.xdist_group("ray")  # the tests that start a Ray cluster share an xdist worker (`make test`)
 def test_a_league_on_a_ray_cluster_stores_the_sequential_results_and_ratings(tmp_path):
     cluster = LocalRayCluster()
     try:

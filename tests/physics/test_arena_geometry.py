@@ -13,7 +13,7 @@ from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.physics.arena_geometry import (FAIRING_END_X, arena_mesh, arena_raycast, arena_sdf, arena_sdf_many,
                                                  is_inside_arena)
 
-# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_arena_geometry")
 
 R = C.ARENA_FILLET_RADIUS

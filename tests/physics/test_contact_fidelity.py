@@ -21,7 +21,7 @@ import pytest
 
 import contact_scenes as cs
 
-# slow: about 15 s for all grids on both simulators. On 2 xdist workers (`make test XDIST=...`) this module's tests
+# slow: about 15 s for all grids on both simulators. On 2 xdist workers (`make test`) this module's tests
 # share one, so its module fixtures are made once
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_contact_fidelity")]
 

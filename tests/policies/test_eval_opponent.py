@@ -14,7 +14,7 @@ from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.ppo.trainer import Probe
 
-# On 2 xdist workers (`make test XDIST=...`) this module's tests share one, so its module fixtures are made once
+# On 2 xdist workers (`make test`) this module's tests share one, so its module fixtures are made once
 pytestmark = pytest.mark.xdist_group("test_eval_opponent")
 
 CHECKPOINTS = Path(__file__).resolve().parents[2] / "policies" / "checkpoints"

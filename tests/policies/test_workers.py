@@ -156,7 +156,7 @@ def test_sigterm_saves_a_final_checkpoint_and_stops_every_worker(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.xdist_group("ray")  # the tests that start a Ray cluster share an xdist worker (`make test XDIST=...`)
+@pytest.mark.xdist_group("ray")  # the tests that start a Ray cluster share an xdist worker (`make test`)
 def test_training_on_a_two_node_ray_cluster_writes_a_checkpoint_that_eval_plays(tmp_path):
     from rocketdrl_ma.cli import main
 
