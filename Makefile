@@ -60,21 +60,22 @@ XDIST ?= -n 2 --dist loadgroup
 PYTEST := $(PY) -m pytest -q -p no:cacheprovider
 COMPUTE_LOG := runs/test-compute.log
 
-# The whole suite, slow-marked tests included: correctness is never skipped.
-test: $(STAMP) $(NODE_STAMP) browser $(BENCHMARL_STAMP)
+# $(call suite,MARKS): the two sessions over the tests that MARKS (a -m expression ending in "and", or empty) selects
+define suite
 	@mkdir -p runs
-	nice -n 19 $(PYTEST) $(XDIST) -m "not wall_clock" tests > $(COMPUTE_LOG) 2>&1 & compute=$$!; \
-	$(PYTEST) -m wall_clock tests; clock=$$?; \
+	nice -n 19 $(PYTEST) $(XDIST) -m "$(1) not wall_clock" tests > $(COMPUTE_LOG) 2>&1 & compute=$$!; \
+	$(PYTEST) -m "$(1) wall_clock" tests; clock=$$?; \
 	wait $$compute; rest=$$?; cat $(COMPUTE_LOG); \
 	test $$rest -eq 0 && test $$clock -eq 0
+endef
+
+# The whole suite, slow-marked tests included: correctness is never skipped.
+test: $(STAMP) $(NODE_STAMP) browser $(BENCHMARL_STAMP)
+	$(call suite,)
 
 # Everything but the tests marked slow, for quick local iteration.
 test-fast: $(STAMP) $(NODE_STAMP) browser
-	@mkdir -p runs
-	nice -n 19 $(PYTEST) $(XDIST) -m "not slow and not wall_clock" tests > $(COMPUTE_LOG) 2>&1 & compute=$$!; \
-	$(PYTEST) -m "not slow and wall_clock" tests; clock=$$?; \
-	wait $$compute; rest=$$?; cat $(COMPUTE_LOG); \
-	test $$rest -eq 0 && test $$clock -eq 0
+	$(call suite,not slow and)
 
 bench: $(STAMP)
 	$(PY) benchmarks/physics_speed.py

@@ -75,7 +75,7 @@ class CarLocal(nn.Module):
         local = torch.bmm(frame, vectors.transpose(1, 2)).transpose(1, 2)
         # an empty slot (present 0) gets zeros; the own vectors are weighed by 1
         present = obs[:, self.present_index].repeat_interleave(2, dim=1)
-        weight = torch.cat((obs.new_ones((n, 4)), present), dim=1).unsqueeze(2)
+        weight = torch.cat((obs.new_ones((n, OWN_LOCAL_FEATURES // 3)), present), dim=1).unsqueeze(2)
         return torch.cat((obs, ((weight * local) / self.local_scale).reshape(n, -1)), dim=1)
 
 

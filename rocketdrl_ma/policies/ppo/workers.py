@@ -27,13 +27,12 @@ from .rollout_policy import RolloutPolicy
 
 log = logging.getLogger(__name__)
 MAX_RESTARTS = 5
-#: what multiprocessing raises when torchrl, having found a dead worker, terminates the others and closes them 0.1 s
-#: later while one is still exiting (a loaded machine): a worker fault like the one it found
-_CLOSE_RACE = "Cannot close a process while it is still running"
 
 
 def _closing_a_live_worker(error: ValueError) -> bool:
-    return _CLOSE_RACE in str(error)
+    """What multiprocessing raises when torchrl, having found a dead worker, terminates the others and closes them
+    0.1 s later while one is still exiting (a loaded machine): a worker fault like the one it found."""
+    return "Cannot close a process while it is still running" in str(error)
 
 
 def default_workers() -> int:
