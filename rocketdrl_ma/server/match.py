@@ -291,11 +291,13 @@ class MatchRunner:
         if slot is not None and message is not None:
             # Only an authenticated sender learns why, on its own slot's key. A priority above the per-decision
             # stream's keeps the reply out of a queue full of states on a busy link; DROP, as there, so a
-            # congested bot never stalls the Zenoh callback that serves every other slot.
+            # congested bot never stalls the Zenoh callback that serves every other slot. Not express: replies
+            # to a burst of bad actions share a batch, where express ones took a batch each and overflowed that
+            # priority's queue (two batches) whenever Zenoh's sender waited for the CPU.
             import zenoh
             self.session.put(self.keys.slot(slot.user, self.id, slot.name, "error"), self._seal(
                 {"kind": "error", "slot": slot.name, "decision": self.decision, "error": message}),
-                express=True, priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
+                priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
 
     def on_action(self, slot: Slot, sample) -> None:
         """Zenoh callback for a slot's ``act`` key: check everything, then hand the controls to the match."""

@@ -2,9 +2,11 @@
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -15,8 +17,11 @@ import torch
 
 from rocketdrl_ma.policies.ppo import TrainConfig, load_train_config, train, validate_train_config
 from rocketdrl_ma.policies.ppo.checkpoint import load_model
+from rocketdrl_ma.policies.ppo.critic import team_order
+from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.policies.ppo.rollout import RolloutEnv, worker_copies
-from rocketdrl_ma.policies.ppo.trainer import worker_config
+from rocketdrl_ma.policies.ppo.rollout_policy import RolloutPolicy
+from rocketdrl_ma.policies.ppo.trainer import Probe, worker_config
 from rocketdrl_ma.policies.ppo.workers import Rollouts, WorkerPlan
 from ray_cluster import LocalRayCluster
 
@@ -133,6 +138,36 @@ def test_a_killed_worker_is_replaced_and_training_finishes_with_a_checkpoint_tha
     model, meta = load_model(run_dir / "final.pt")
     assert meta["agent_steps"] >= 4096
     assert model.act_deterministic(np.zeros((1, meta["network"]["obs_dim"]), np.float32)).shape[0] == 1
+
+
+@pytest.mark.slow
+def test_a_worker_dead_between_batches_fails_the_weight_push_and_fresh_workers_collect_the_next_batch():
+    """torchrl's shared-memory weight push waits for every worker's acknowledgement with no time limit: a worker
+    killed while the learner updated (after its batch, before the push) hung the run for good. The push now raises
+    ``WorkerLost`` and the workers are rebuilt."""
+    cfg = worker_config(validate_train_config({**load_train_config("policies/penalty.yaml").to_mapping(),
+                                               "n_envs": 2, "buffer_size": 64, "batch_size": 64, "hidden_units": 16}))
+    probe = Probe.of(cfg)
+    model = PPOModel(probe.obs_dim, probe.action, cfg.hidden_units, cfg.num_layers, cfg.normalize, cfg.init_std,
+                     probe.idle, cfg.features, team_order(probe.row_teams, cfg.critic).shape[1])
+    rollouts = Rollouts(cfg, RolloutPolicy(model, None, 0), WorkerPlan(n_workers=2), probe.rows_per_copy)
+    try:
+        assert rollouts.next_batch().numel() == 64
+        first_workers = rollouts.worker_pids()
+        os.kill(first_workers[0], signal.SIGKILL)
+        deadline = time.monotonic() + 30
+        while rollouts.workers_alive() == 2 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        push = threading.Thread(target=rollouts.update_weights, daemon=True)
+        push.start()
+        push.join(60)
+        assert not push.is_alive(), "the weight push is still waiting for the dead worker"
+        assert rollouts.restarts == 1
+        assert rollouts.next_batch().numel() == 64
+        assert rollouts.restarts == 1 and rollouts.workers_alive() == 2
+        assert not set(rollouts.worker_pids()) & set(first_workers)
+    finally:
+        rollouts.close()
 
 
 @pytest.mark.slow

@@ -7,9 +7,10 @@ on a Ray cluster instead (``RayCollector``). Whatever the backend, a batch comes
 ``[rows, T]`` (rows first, then decisions), and ``update_weights`` ships the policy (learner, opponents and
 the learner's decisions: ``rollout_policy.py``) to every worker.
 
-Faults: a worker that dies (a crash, an OOM kill, ``kill -9``) makes torchrl's collector raise; the batch being
-collected is dropped, the collector is rebuilt with fresh workers, and collection goes on. A run whose workers
-keep dying (``MAX_RESTARTS`` in a row without a batch in between) stops with the error.
+Faults: a worker that dies (a crash, an OOM kill, ``kill -9``) makes torchrl's collector raise while it collects,
+or the weight push raise (``weight_push.py``) between batches; the batch being collected is dropped, the collector
+is rebuilt with fresh workers, and collection goes on. A run whose workers keep dying (``MAX_RESTARTS`` in a row
+without a batch in between) stops with the error.
 """
 from __future__ import annotations
 
@@ -68,6 +69,7 @@ class Rollouts:
         else:
             self.horizon = max(1, cfg.buffer_size // self.rows)
         self.restarts = 0
+        self._consecutive_faults = 0
         self._collector = None
         self._iterator: Iterator | None = None
 
@@ -79,16 +81,24 @@ class Rollouts:
     def _build(self):
         from torchrl.collectors import Collector, MultiAsyncCollector, MultiSyncCollector
 
+        from .weight_push import WatchedSharedMemPush
+
         per_worker = self.rows_per_worker * self.horizon
         if self.plan.ray is not None:
             return self._build_ray(per_worker)
         if self.plan.n_workers == 0:
             return Collector(self._factories()[0](), self.policy, frames_per_batch=per_worker, total_frames=-1,
                              auto_register_policy_transforms=False)
+        push = WatchedSharedMemPush()
         if self.plan.asynchronous:
-            return MultiAsyncCollector(self._factories(), self.policy, frames_per_batch=per_worker, total_frames=-1)
-        return MultiSyncCollector(self._factories(), self.policy, frames_per_batch=per_worker * self.plan.processes,
-                                  total_frames=-1, cat_results=0)
+            collector = MultiAsyncCollector(self._factories(), self.policy, frames_per_batch=per_worker,
+                                            total_frames=-1, weight_sync_schemes={"policy": push})
+        else:
+            collector = MultiSyncCollector(self._factories(), self.policy,
+                                           frames_per_batch=per_worker * self.plan.processes, total_frames=-1,
+                                           cat_results=0, weight_sync_schemes={"policy": push})
+        push.watch(collector.procs)
+        return collector
 
     def _build_ray(self, per_worker: int):
         from torchrl.collectors.distributed import RayCollector
@@ -111,29 +121,39 @@ class Rollouts:
         while True:
             if self._iterator is None:
                 self._collector = self._build()
-                if self.plan.n_workers > 0:  # the workers start from the learner's weights and decisions
-                    self._collector.update_policy_weights_()
+                self.update_weights()  # the workers start from the learner's weights and decisions
+                if self._collector is None:  # a worker died before it took them
+                    continue
                 self._iterator = iter(self._collector)
             try:
                 batch = next(self._iterator)
             except (RuntimeError, EOFError, BrokenPipeError, ConnectionError, OSError, ValueError) as error:
                 if isinstance(error, ValueError) and not _closing_a_live_worker(error):
                     raise
-                self.restarts += 1
-                consecutive = getattr(self, "_consecutive", 0) + 1
-                self._consecutive = consecutive
-                log.warning("rollout workers failed (%s); restarting them (%d)", error, self.restarts)
-                self._shutdown_quietly()
-                if consecutive > MAX_RESTARTS:
-                    raise RuntimeError(f"rollout workers failed {consecutive} times in a row: {error}") from error
+                self._worker_fault(error)
                 continue
-            self._consecutive = 0
+            self._consecutive_faults = 0
             return batch.reshape(-1, batch.shape[-1]) if batch.ndim > 2 else batch
 
     def update_weights(self) -> None:
-        """Ship the policy (weights and buffers) to every worker."""
+        """Ship the policy (weights and buffers) to every worker. A worker found dead drops the collector: the
+        next batch comes from fresh workers, which start from these weights."""
+        from .weight_push import WorkerLost
+
         if self._collector is not None and self.plan.n_workers > 0:
-            self._collector.update_policy_weights_()
+            try:
+                self._collector.update_policy_weights_()
+            except WorkerLost as error:
+                self._worker_fault(error)
+
+    def _worker_fault(self, error: Exception) -> None:
+        """Stop the workers after one of them failed; give up after ``MAX_RESTARTS`` faults without a batch."""
+        self.restarts += 1
+        self._consecutive_faults += 1
+        log.warning("rollout workers failed (%s); restarting them (%d)", error, self.restarts)
+        self._shutdown_quietly()
+        if self._consecutive_faults > MAX_RESTARTS:
+            raise RuntimeError(f"rollout workers failed {self._consecutive_faults} times in a row: {error}") from error
 
     def set_difficulty(self, level: float | None) -> None:
         """Where a minigame curriculum stands: workers (re)built from now on start their games at this level;
