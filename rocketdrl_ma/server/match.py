@@ -395,9 +395,15 @@ class MatchRunner:
         pubs.update({s.name: self.keys.slot(s.user, self.id, s.name, "obs") for s in self.slots.values()
                      if s.occupant == "remote"})
         import zenoh
-        # DROP, not BLOCK: a bot whose link is congested must never stall the match thread.
+        # DROP, not BLOCK: a bot whose link is congested must never stall the match thread. The per-decision
+        # messages go express; events (a goal for a spectator's feed) are rare and each one counts, so they go
+        # above the states' priority and batched: with every message of a decision express, a goal's events,
+        # sent with its decision's observations and state, were dropped whenever Zenoh's sender waited for the CPU.
         self._publishers = {name: self.session.declare_publisher(
-            key, express=True, congestion_control=zenoh.CongestionControl.DROP) for name, key in pubs.items()}
+            key, express=True, congestion_control=zenoh.CongestionControl.DROP) for name, key in pubs.items()
+            if name != "events"}
+        self._publishers["events"] = self.session.declare_publisher(
+            pubs["events"], priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
 
     def _fill_controls(self, state) -> dict[str, CarControls]:
         return {name: policy.controls(name, state) for name, policy in self._fill.items()}
@@ -539,9 +545,12 @@ class MatchRunner:
             self._publishers[name].put(payload)
             return
         # The last message of a match must arrive (a bot waits for it): it may wait for a full queue,
-        # which per-decision messages never do. Zenoh bounds that wait and closes a link that stays stuck.
+        # which per-decision messages never do. Zenoh bounds that wait and closes a link that stays stuck. At its
+        # key's priority: Zenoh keeps the order within a priority, and a message that overtook the key's last ones
+        # would make them stale to the receiver (a lower ``seq``).
         import zenoh
-        self.session.put(self._publishers[name].key_expr, payload, express=True,
+        publisher = self._publishers[name]
+        self.session.put(publisher.key_expr, payload, express=True, priority=publisher.priority,
                          congestion_control=zenoh.CongestionControl.BLOCK)
 
     def _timing(self) -> dict:

@@ -37,6 +37,24 @@ def _selfplay_cfg(**extra) -> TrainConfig:
     return validate_train_config({**load_train_config("policies/selfplay_1v1.yaml").to_mapping(), **SELFPLAY, **extra})
 
 
+@pytest.mark.slow
+def test_asynchronous_workers_train_on_each_workers_batch_and_record_the_policy_lag(tmp_path):
+    """``async: true`` (torchrl's ``MultiAsyncCollector``): the learner updates on each worker's batch as it comes
+    while the other worker goes on collecting with the weights it had, so some batches come from older weights."""
+    cfg = _selfplay_cfg(max_steps=1024)
+    plan = WorkerPlan(2, asynchronous=True)
+    result = train(cfg, tmp_path / "final.pt", tmp_path, progress=False, workers=plan)
+    assert result.agent_steps >= 1024
+    layout = Rollouts(worker_config(cfg), None, plan, Probe.of(worker_config(cfg)).rows_per_copy)
+    per_batch = layout.rows_per_worker * layout.horizon  # one worker's batch fills the buffer
+    assert per_batch == cfg.buffer_size
+    assert len(result.policy_lags) == len(result.losses) == result.agent_steps // per_batch
+    assert min(result.policy_lags) >= 0 and max(result.policy_lags) >= 1
+    assert all(np.isfinite(v) for losses in result.losses for v in losses.values())
+    model, meta = load_model(tmp_path / "final.pt")
+    assert meta["agent_steps"] == result.agent_steps
+
+
 def test_worker_copies_split_evenly_and_every_copy_keeps_its_seed():
     assert [worker_copies(32, n) for n in (1, 2, 3, 8)] == [32, 16, 11, 4]
     cfg = worker_config(_selfplay_cfg())
