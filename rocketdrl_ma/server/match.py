@@ -397,8 +397,8 @@ class MatchRunner:
         import zenoh
         # DROP, not BLOCK: a bot whose link is congested must never stall the match thread. The per-decision
         # messages go express; events (a goal for a spectator's feed) are rare and each one counts, so they go
-        # above the states' priority and batched: with every message of a decision express, a goal's events,
-        # sent with its decision's observations and state, were dropped whenever Zenoh's sender waited for the CPU.
+        # above the states' priority and batched: with every message of a decision express, each taking one of the
+        # priority's two batches, a goal's events were dropped whenever Zenoh's sender waited for the CPU.
         self._publishers = {name: self.session.declare_publisher(
             key, express=True, congestion_control=zenoh.CongestionControl.DROP) for name, key in pubs.items()
             if name != "events"}

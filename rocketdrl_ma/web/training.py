@@ -126,10 +126,14 @@ class TrainingBroadcast:
                 decision += 1
                 self._stop.wait(max(0.0, start + decision * period_s - time.monotonic()))
             self._send(env, decision, info, slots, done=True)
+            # The episode's end must reach the viewers (a page shows it from this message): unlike the per-decision
+            # messages it may wait for a full queue, on this thread, never the trainer's.
+            from zenoh import CongestionControl
             self.session.put(self.keys.events(self.run),
                              pack({"match": self.run, "decision": decision, "final": True, "info": info,
                                    "status": MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED,
-                                   "summary": env.rules.summary()}))
+                                   "summary": env.rules.summary()}),
+                             congestion_control=CongestionControl.BLOCK)
             if not self._stop.is_set():
                 self.published.append(iteration)
         except Exception:  # a broken evaluation must not take the training down

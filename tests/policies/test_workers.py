@@ -51,7 +51,7 @@ def test_asynchronous_workers_train_on_each_workers_batch_and_record_the_policy_
     assert len(result.policy_lags) == len(result.losses) == result.agent_steps // per_batch
     assert min(result.policy_lags) >= 0 and max(result.policy_lags) >= 1
     assert all(np.isfinite(v) for losses in result.losses for v in losses.values())
-    model, meta = load_model(tmp_path / "final.pt")
+    _, meta = load_model(tmp_path / "final.pt")
     assert meta["agent_steps"] == result.agent_steps
 
 
@@ -176,6 +176,7 @@ def test_a_worker_dead_between_batches_fails_the_weight_push_and_fresh_workers_c
         deadline = time.monotonic() + 30
         while rollouts.workers_alive() == 2 and time.monotonic() < deadline:
             time.sleep(0.1)
+        assert rollouts.workers_alive() == 1
         push = threading.Thread(target=rollouts.update_weights, daemon=True)
         push.start()
         push.join(60)
