@@ -45,7 +45,8 @@ def test_asynchronous_workers_train_on_each_workers_batch_and_record_the_policy_
     plan = WorkerPlan(2, asynchronous=True)
     result = train(cfg, tmp_path / "final.pt", tmp_path, progress=False, workers=plan)
     assert result.agent_steps >= 1024
-    layout = Rollouts(worker_config(cfg), None, plan, Probe.of(worker_config(cfg)).rows_per_copy)
+    wcfg = worker_config(cfg)
+    layout = Rollouts(wcfg, None, plan, Probe.of(wcfg).rows_per_copy)
     per_batch = layout.rows_per_worker * layout.horizon  # one worker's batch fills the buffer
     assert per_batch == cfg.buffer_size
     assert len(result.policy_lags) == len(result.losses) == result.agent_steps // per_batch
