@@ -23,9 +23,10 @@ kickoffs two cars rotate, the two lowest-numbered live ones (a demoed car's plac
 A car that is not first and has to come back (its spot is behind it) takes an active boost pad on the way when it
 is short of boost and the pad costs little of a detour: the boost collected on the way back.
 
-At a kickoff the two nearest cars go. The second one aims beside the ball, how far depending on the kickoff layout
-(``kickoff_aim``): it meets the ball just after the collision at the centre and sends it on towards the opponents'
-goal, which chasers who all went for the ball have left empty.
+At a kickoff the two nearest cars go (in 3v3 and 4v4 only the nearest, from some layouts: ``KICKOFF_ALONE``). The
+second one aims beside the ball, how far depending on the kickoff layout (``kickoff_aim``): it meets the ball just
+after the collision at the centre and sends it on towards the opponents' goal, which chasers who all went for the
+ball have left empty.
 """
 from __future__ import annotations
 
@@ -78,19 +79,26 @@ class KickoffLane(Enum):
 DIAGONAL_BEARING_DEG, OFF_CENTRE_BEARING_DEG = 20.0, 1.0
 #: how far beside the ball (uu along x, towards the car's own side when positive) the second kickoff taker aims, by
 #: team size (2; 3 and more) and the lanes of the first and second taker. Searched per layout against flip-chasers
-#: with the real 3 s countdown, over every 2v2 and 3v3 kickoff layout from both ends (README, "Team play"); aiming
-#: at the ball's centre as the first taker does, the second car's touch sends the ball towards a corner. With three
-#: or more cars the two nearest are never the back spot's.
+#: with the real 3 s countdown, over every 2v2 and 3v3 kickoff layout from both ends, the 3v3 ones also at each of
+#: the 8 decision phases a kickoff after a goal can start at (README, "Team play"); aiming at the ball's centre as
+#: the first taker does, the second car's touch sends the ball towards a corner. With three or more cars the two
+#: nearest are never the back spot's.
 KICKOFF_SECOND_AIM_UU: dict[int, dict[tuple[KickoffLane, KickoffLane], float]] = {
     2: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -80.0,
         (KickoffLane.DIAGONAL, KickoffLane.BACK): -200.0,
         (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 300.0,
         (KickoffLane.OFF_CENTRE, KickoffLane.BACK): -100.0,
         (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): -200.0},
-    3: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -40.0,
-        (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 300.0,
-        (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): 300.0},
+    3: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -120.0,
+        (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): -150.0},
 }
+#: layouts (lanes of the two cars nearest the ball) where, by team size, only the nearest car takes the kickoff and
+#: the other stays back as a second man, searched with the offsets above: in 3v3 and 4v4 when both come from the
+#: off-centre spots. The lanes are read each decision, and the car staying back drives into the back lane.
+KICKOFF_ALONE: dict[int, frozenset[tuple[KickoffLane, KickoffLane]]] = {
+    2: frozenset(),
+    3: frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE), (KickoffLane.OFF_CENTRE, KickoffLane.BACK),
+                  (KickoffLane.BACK, KickoffLane.OFF_CENTRE)})}
 
 
 @dataclass(frozen=True)
@@ -149,6 +157,15 @@ def kickoff_lane(pos: np.ndarray) -> KickoffLane:
     return KickoffLane.OFF_CENTRE if bearing_deg > OFF_CENTRE_BEARING_DEG else KickoffLane.BACK
 
 
+def kickoff_taker_count(view: TeamView, order: list[str]) -> int:
+    """How many of the team's cars (``order``: ``kickoff_takers(view)``) take this kickoff: ``KICKOFF_TAKERS``, or
+    one in a ``KICKOFF_ALONE`` layout."""
+    if len(order) < 2:
+        return len(order)
+    layout = (kickoff_lane(view.pos[order[0]]), kickoff_lane(view.pos[order[1]]))
+    return 1 if layout in KICKOFF_ALONE[min(len(order), 3)] else KICKOFF_TAKERS
+
+
 def kickoff_aim(view: TeamView, agent: str) -> np.ndarray:
     """Where ``agent``, a kickoff taker, drives at: the ball for the first, for the second beside it by
     ``KICKOFF_SECOND_AIM_UU`` of its team size and layout (towards its own side of the field's long axis when
@@ -173,8 +190,9 @@ def assign_roles(view: TeamView, last_touch: str | None) -> dict[str, Role]:
         return {}
     if is_kickoff(view):
         by_time = kickoff_takers(view)
-        takers = by_time[:KICKOFF_TAKERS]
-        others = sorted(by_time[KICKOFF_TAKERS:], key=lambda a: (view.pos[a][1], a))
+        count = kickoff_taker_count(view, by_time)
+        takers = by_time[:count]
+        others = sorted(by_time[count:], key=lambda a: (view.pos[a][1], a))
         return {**{a: Role.FIRST for a in takers},
                 **{a: Role.LAST if k == 0 else Role.SECOND for k, a in enumerate(others)}}
     by_number = sorted(view.agents, key=agent_number)

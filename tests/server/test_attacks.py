@@ -187,7 +187,8 @@ def test_forged_liveliness_cannot_keep_a_killed_bot_connected(running, procs):
     procs.botproc(running, "alive", ["orange_0"], "--delay-ms", "25")
     slot = lambda: running.lobby.inspect("alive")["slot_status"]["blue_0"]  # noqa: E731
     wait_for(lambda: slot()["received"] >= 20, 60, "blue to play 20 decisions")
-    # a live bot may miss a 100 ms deadline now and then on a loaded machine: only the misses after the kill count
+    # a live bot may miss a 100 ms deadline now and then on a loaded machine: only the misses after the kill count,
+    # and one of blue's last decisions, after this read and before the kill lands, may add a miss or two to them
     missed_alive = slot()["missed"]
     os.kill(blue.pid, signal.SIGKILL)
     # the hostile holds a copy of blue's liveliness token: blue still looks alive, but after the streak of
@@ -195,7 +196,7 @@ def test_forged_liveliness_cannot_keep_a_killed_bot_connected(running, procs):
     stalled = wait_for(lambda: (lambda s: s if s["stalled"] else None)(slot()), 60, "blue_0 to count as gone")
     assert stalled["alive"] and not stalled["connected"]
     streak = running.server.settings.limits.missed_streak
-    assert stalled["missed"] - missed_alive == streak
+    assert streak <= stalled["missed"] - missed_alive <= streak + 2
     wait_for(lambda: slot()["disconnected"] >= 20, 60, "decisions after the streak")
     after = slot()
     assert after["missed"] == stalled["missed"] and after["alive"]  # no more waiting for it, token or not
