@@ -157,13 +157,20 @@ def kickoff_lane(pos: np.ndarray) -> KickoffLane:
     return KickoffLane.OFF_CENTRE if bearing_deg > OFF_CENTRE_BEARING_DEG else KickoffLane.BACK
 
 
+def kickoff_layout(view: TeamView, order: list[str]) -> tuple[int, tuple[KickoffLane, KickoffLane]]:
+    """The keys of the kickoff tables (``KICKOFF_SECOND_AIM_UU``, ``KICKOFF_ALONE``) for a team of two or more cars
+    (``order``: ``kickoff_takers(view)``): its team size (3 for three and more) and the lanes of its two nearest
+    cars, read from their positions now."""
+    return min(len(order), 3), (kickoff_lane(view.pos[order[0]]), kickoff_lane(view.pos[order[1]]))
+
+
 def kickoff_taker_count(view: TeamView, order: list[str]) -> int:
     """How many of the team's cars (``order``: ``kickoff_takers(view)``) take this kickoff: ``KICKOFF_TAKERS``, or
     one in a ``KICKOFF_ALONE`` layout."""
     if len(order) < 2:
         return len(order)
-    layout = (kickoff_lane(view.pos[order[0]]), kickoff_lane(view.pos[order[1]]))
-    return 1 if layout in KICKOFF_ALONE[min(len(order), 3)] else KICKOFF_TAKERS
+    size, lanes = kickoff_layout(view, order)
+    return 1 if lanes in KICKOFF_ALONE[size] else KICKOFF_TAKERS
 
 
 def kickoff_aim(view: TeamView, agent: str) -> np.ndarray:
@@ -175,8 +182,8 @@ def kickoff_aim(view: TeamView, agent: str) -> np.ndarray:
     if len(order) < 2 or agent != order[1]:
         return view.ball_pos
     pos = view.pos[agent]
-    by_layout = KICKOFF_SECOND_AIM_UU[min(len(order), 3)]
-    aside_uu = by_layout.get((kickoff_lane(view.pos[order[0]]), kickoff_lane(pos)), 0.0)
+    size, lanes = kickoff_layout(view, order)
+    aside_uu = KICKOFF_SECOND_AIM_UU[size].get(lanes, 0.0)
     side = math.copysign(1.0, pos[0]) if abs(pos[0]) > 1.0 else 1.0
     return view.ball_pos + np.array([side * aside_uu, 0.0, 0.0])
 
@@ -184,8 +191,9 @@ def kickoff_aim(view: TeamView, agent: str) -> np.ndarray:
 def assign_roles(view: TeamView, last_touch: str | None) -> dict[str, Role]:
     """Every live team-mate's role; ties go to the lower agent name, so all team-mates reach the same answer.
     At a kickoff the two nearest cars go: the nearer takes it, the other arrives just after it (``kickoff_aim``);
-    of the others the deepest is the last man. Outside kickoffs the ``ROTATING_CARS`` lowest-numbered cars rotate
-    (first man, last man, second men between) and the others are pressers."""
+    in a ``KICKOFF_ALONE`` layout only the nearer goes. Of the others the deepest is the last man. Outside kickoffs
+    the ``ROTATING_CARS`` lowest-numbered cars rotate (first man, last man, second men between) and the others are
+    pressers."""
     if not view.agents:
         return {}
     if is_kickoff(view):
