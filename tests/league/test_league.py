@@ -33,6 +33,19 @@ def league(tmp_path: Path, name: str, clock_s: float, **extra) -> dict:
                          {"name": "idle", "policy": "scripted:idle"}], **extra}
 
 
+COMMITTED_LEAGUES = sorted(p.relative_to(REPO).as_posix() for p in (REPO / "leagues").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("path", COMMITTED_LEAGUES)
+def test_every_committed_league_config_is_valid(path, monkeypatch):
+    """The README's league commands run: each committed config passes validation (entrants against its match's team
+    size, policies, schedule) and is named after its file, which names its results and report."""
+    monkeypatch.chdir(REPO)
+    config = load_league_config(path)
+    assert config.name == Path(path).stem
+    assert len(config.entrants) >= 2
+
+
 def test_config_rejects_bad_input(tmp_path):
     base = league(tmp_path, "v", 5.0)
     with pytest.raises(ValueError, match="unknown key"):
