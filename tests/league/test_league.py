@@ -19,6 +19,8 @@ from rocketdrl_ma.league.ratings import rate
 from rocketdrl_ma.league.report import write_report
 from rocketdrl_ma.league.runner import run_league
 from rocketdrl_ma.league.schedule import schedule
+from rocketdrl_ma.policies.base import Policy
+from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.results import ResultsStore
 from processes import two_processes
 
@@ -38,12 +40,16 @@ COMMITTED_LEAGUES = sorted(p.relative_to(REPO).as_posix() for p in (REPO / "leag
 
 @pytest.mark.parametrize("path", COMMITTED_LEAGUES)
 def test_every_committed_league_config_is_valid(path, monkeypatch):
-    """The README's league commands run: each committed config passes validation (entrants against its match's team
-    size, policies, schedule) and is named after its file, which names its results and report."""
+    """Each committed config passes validation (its match config, entrants against the match's team size), is named
+    after its file (which names its results and report), and every policy its entrants field loads: a scripted bot
+    by name, a checkpoint from its committed file."""
     monkeypatch.chdir(REPO)
     config = load_league_config(path)
     assert config.name == Path(path).stem
-    assert len(config.entrants) >= 2
+    policies = {player.policy for entrant in config.entrants if not entrant.remote for player in entrant.players}
+    assert policies
+    for spec in sorted(policies):
+        assert isinstance(load_policy(spec), Policy), spec
 
 
 def test_config_rejects_bad_input(tmp_path):
