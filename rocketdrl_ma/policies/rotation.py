@@ -55,9 +55,11 @@ SUPPORT_BACK_UU, SUPPORT_X_SHARE = 1900.0, 0.5
 #: more (the cars that do not take a 3v3 or 4v4 kickoff)
 LAST_BEHIND_PAIR_UU, LAST_BEHIND_UU = 1500.0, 2600.0
 GOAL_LINE_STAND_UU = 180.0  # how far in front of the goal line the last man stands at most
-#: boost on the way back: below this much boost, a pad within this detour (small pad, big pad)
+#: boost on the way back: below this much boost, a pad within this detour (uu; small pad, big pad) by team size (2; 3
+#: and more cars a side). With three or more, small pads further out are worth it: paired rollouts of 3v3 matches
+#: gained goals with 800 uu, where 2v2 matches lost with it (README, "Boost on the way back").
 LOW_BOOST = 60.0
-DETOUR_SMALL_UU, DETOUR_BIG_UU = 500.0, 1300.0
+DETOUR_UU: dict[int, tuple[float, float]] = {2: (500.0, 1300.0), 3: (800.0, 1300.0)}
 
 
 class Role(IntEnum):
@@ -261,11 +263,13 @@ def support_spot(ball: np.ndarray, rank: int = 1) -> np.ndarray:
 
 
 def boost_on_the_way(pos: np.ndarray, spot: np.ndarray, boost: float, pad_timers: np.ndarray,
-                     pads_team_frame: np.ndarray) -> np.ndarray | None:
+                     pads_team_frame: np.ndarray, team_size: int) -> np.ndarray | None:
     """The active pad worth a detour on the way from ``pos`` back to ``spot`` (None: drive straight there): only when
-    short of boost and coming back (the pad not upfield of the car), the one with the least detour."""
+    short of boost and coming back (the pad not upfield of the car), the one with the least detour, within
+    ``DETOUR_UU`` of the match's ``team_size`` (cars a side, demoed ones too)."""
     if boost >= LOW_BOOST:
         return None
+    small_uu, big_uu = DETOUR_UU[min(max(team_size, 2), 3)]
     direct = float(np.hypot(*(spot - pos)[:2]))
     best, best_cost = None, np.inf
     for k in np.flatnonzero(pad_timers <= 0.0):
@@ -273,7 +277,7 @@ def boost_on_the_way(pos: np.ndarray, spot: np.ndarray, boost: float, pad_timers
         if pad[1] > pos[1] + 200.0:
             continue
         detour = float(np.hypot(*(pad - pos)[:2]) + np.hypot(*(spot - pad)[:2])) - direct
-        allowed = DETOUR_BIG_UU if C.BOOST_PAD_IS_BIG[k] else DETOUR_SMALL_UU
+        allowed = big_uu if C.BOOST_PAD_IS_BIG[k] else small_uu
         cost = detour - (600.0 if C.BOOST_PAD_IS_BIG[k] else 0.0)
         if detour < allowed and cost < best_cost:
             best, best_cost = pad, cost

@@ -251,7 +251,8 @@ class Rotator(ScriptedBot):
             rank = sum(1 for a, r in roles.items() if r is Role.SECOND and a != agent and view.pos[a][1] > pos[1])
             spot = rotation.support_spot(ball, rank=1 + rank)
         pads = team_frame(agent, C.BOOST_PAD_POSITIONS)
-        target = rotation.boost_on_the_way(pos, spot, car.boost, state.pad_timers, pads)
+        team_size = sum(1 for a in state.cars if agent_team(a) == agent_team(agent))
+        target = rotation.boost_on_the_way(pos, spot, car.boost, state.pad_timers, pads, team_size)
         if target is None:
             target = spot
         target = _around_ball(pos, target, view.ball_pos, self.BALL_CLEARANCE_UU)

