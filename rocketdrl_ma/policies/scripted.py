@@ -18,7 +18,7 @@ from rocketdrl_ma.rules.state import GameState, agent_team
 from rocketdrl_ma.validation import check_name
 
 from .base import Policy
-from . import rotation
+from . import rotation, saves
 from .rotation import Role
 
 ATTACK_GOAL = np.array([0.0, C.ARENA_EXTENT_Y + 200.0, 0.0])  # in the team frame: always +y
@@ -206,7 +206,8 @@ class Rotator(ScriptedBot):
     loose ball) or covers the goal; in 3v3 and 4v4 the other cars press, playing the ball as the first man does.
     Roles are worked out afresh from positions every decision, identically by every team-mate. A car on the ball
     dodges into a ground ball it is lined up to shoot (the flip-chaser dodges only at kickoffs): the harder hit
-    wins the challenge. Cars coming back take boost on the way. Alone on its team (1v1, or team-mates demoed) it
+    wins the challenge. A car of any role in the path of a ball heading into its goal that would pass over its roof
+    jumps into it (``saves.py``). Cars coming back take boost on the way. Alone on its team (1v1, or team-mates demoed) it
     is the flip-chaser with that dodge. A car of any role standing on its side against a wall jumps off it. At a
     kickoff the second car aims beside the ball, by the kickoff layout (``rotation.kickoff_aim``). Stateless,
     lookup-table rows only (a lookup clone can copy it), one instance plays any number of cars.
@@ -233,6 +234,9 @@ class Rotator(ScriptedBot):
         if _on_its_side_against_a_wall(car, self.STANDING_UU_S):  # a covering car stuck there sat out 80 s
             return _air_row(jump=True)
         view = rotation.team_view(agent, state)
+        if saves.jump_to_save(car.on_ground, car.is_jumping, float(car.rot_mat[2, 2]), view.pos[agent], view.vel[agent],
+                              view.ball_pos, view.ball_vel):
+            return _air_row(jump=True)
         roles = rotation.assign_roles(view, state.last_touch)
         role = roles.get(agent, Role.FIRST)
         if role is Role.FIRST and car.on_ground and rotation.is_kickoff(view):
