@@ -1,4 +1,4 @@
-"""The save jump: a car standing in the path of a ball on its way into the car's own goal, which would pass over the
+"""The save jump: a car in the path of a ball on its way into the car's own goal, which would pass over the
 car's roof but within what a jump reaches, jumps into it.
 
 Goal histories of 3v3 matches (rotators against flip-chasers) showed the ball bouncing over a car on its goal line: in
@@ -17,8 +17,8 @@ from rocketdrl_ma.physics import constants as C
 OWN_GOAL_Y = -C.ARENA_EXTENT_Y
 CAR_REST_Z_UU = C.CAR_SPAWN_REST_Z
 ROOF_ABOVE_CENTRE_UU = 35.0  # the car's roof over its centre: hitbox half height plus its offset, rounded up
-#: the ball passes within this of the car's centre across its path (uu): the car's half length plus the ball's
-#: radius, less a little, since a glancing touch on the roof's corner lets the ball on
+#: the ball passes within this of the car's centre across its path (uu): the half width of a car facing the ball
+#: plus the ball's radius is 133 uu; the rest is slack for the prediction's error and the car turning in its jump
 SAVE_HALF_WIDTH_UU = 160.0
 #: jump at most this long before the ball arrives (s); the prediction goes bad further ahead
 SAVE_LEAD_S = 0.5
@@ -76,7 +76,9 @@ def jump_to_save(on_ground: bool, is_jumping: bool, up_z: float, car_pos: np.nda
     on its wheels and under the roof of a jump by then. In a jump's hold it keeps holding while such a ball is still
     to come, its bottom over the car's centre (the roof is too strict: the car rises too little before the hold ends
     and the ball goes over it); a jump at a lower ball (the shot dodge's, into a rolling one) goes on as begun."""
-    if not heading_into_goal(ball_pos, ball_vel) or (on_ground and up_z < UPRIGHT_UP_Z) or not (on_ground or is_jumping):
+    if not (on_ground or is_jumping) or (on_ground and up_z < UPRIGHT_UP_Z):
+        return False
+    if not heading_into_goal(ball_pos, ball_vel):
         return False
     crossing = passing(car_pos, car_vel, ball_pos, ball_vel)
     if crossing is None or crossing.in_s > SAVE_LEAD_S or abs(crossing.aside_uu) > SAVE_HALF_WIDTH_UU:

@@ -207,10 +207,10 @@ class Rotator(ScriptedBot):
     Roles are worked out afresh from positions every decision, identically by every team-mate. A car on the ball
     dodges into a ground ball it is lined up to shoot (the flip-chaser dodges only at kickoffs): the harder hit
     wins the challenge. A car of any role in the path of a ball heading into its goal that would pass over its roof
-    jumps into it (``saves.py``). Cars coming back take boost on the way. Alone on its team (1v1, or team-mates demoed) it
-    is the flip-chaser with that dodge. A car of any role standing on its side against a wall jumps off it. At a
-    kickoff the second car aims beside the ball, by the kickoff layout (``rotation.kickoff_aim``). Stateless,
-    lookup-table rows only (a lookup clone can copy it), one instance plays any number of cars.
+    jumps into it (``saves.py``). Cars coming back take boost on the way. Alone on its team (1v1, or team-mates
+    demoed) it is the flip-chaser with that dodge. A car of any role standing on its side against a wall jumps off
+    it. At a kickoff the second car aims beside the ball, by the kickoff layout (``rotation.kickoff_aim``).
+    Stateless, lookup-table rows only (a lookup clone can copy it), one instance plays any number of cars.
     """
 
     bot_name = "rotator"

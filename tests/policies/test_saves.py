@@ -24,7 +24,7 @@ def test_the_roof_height_of_a_held_jump_follows_the_simulated_car():
         centre_z = float(m.game_state().cars["blue_0"].pos[2])
         errors.append(saves.roof_height_uu(k * 4 / C.TICK_RATE_HZ) - saves.ROOF_ABOVE_CENTRE_UU - centre_z)
     assert max(abs(e) for e in errors) < 10.0, np.round(errors, 1)
-    assert errors[-1] > -10.0 and saves.roof_height_uu(0.4) > saves.roof_height_uu(0.2) > saves.roof_height_uu(0.0)
+    assert saves.roof_height_uu(0.4) > saves.roof_height_uu(0.2) > saves.roof_height_uu(0.0)
 
 
 def test_passing_is_where_the_ball_crosses_the_cars_line_under_gravity():
