@@ -14,8 +14,8 @@ import numpy as np
 
 from rocketdrl_ma.physics import constants as C
 
-OWN_GOAL_Y = -C.ARENA_EXTENT_Y
-CAR_REST_Z_UU = C.CAR_SPAWN_REST_Z
+from .rotation import OWN_GOAL_Y
+
 ROOF_ABOVE_CENTRE_UU = 35.0  # the car's roof over its centre: hitbox half height plus its offset, rounded up
 #: the ball passes within this of the car's centre across its path (uu): the half width of a car facing the ball
 #: plus the ball's radius is 133 uu; the rest is slack for the prediction's error and the car turning in its jump
@@ -32,7 +32,7 @@ def roof_height_uu(after_s: float) -> float:
     hold force for ``JUMP_MAX_TIME`` and gravity (within 10 uu of the simulated car for the first 0.4 s)."""
     hold_s = min(after_s, C.JUMP_MAX_TIME)
     lift = C.JUMP_ACCEL + C.GRAVITY_Z
-    z = CAR_REST_Z_UU + C.JUMP_IMMEDIATE_VEL * hold_s + 0.5 * lift * hold_s ** 2
+    z = C.CAR_SPAWN_REST_Z + C.JUMP_IMMEDIATE_VEL * hold_s + 0.5 * lift * hold_s ** 2
     free_s = after_s - hold_s
     if free_s > 0.0:
         z += (C.JUMP_IMMEDIATE_VEL + lift * hold_s) * free_s + 0.5 * C.GRAVITY_Z * free_s ** 2
