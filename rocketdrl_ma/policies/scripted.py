@@ -273,7 +273,7 @@ class Rotator(ScriptedBot):
         if rotation.is_kickoff(view) or not car.on_ground or view.ball_pos[2] > self.DODGE_MAX_BALL_Z_UU:
             return None
         pos, rot, vel = view.pos[agent], _team_rot(agent, car.rot_mat), view.vel[agent]
-        if rot[2, 2] < 0.9:  # on a wall or a ramp: a dodge from there does not go at the ball
+        if rot[2, 2] < saves.UPRIGHT_UP_Z:  # on a wall or a ramp: a dodge from there does not go at the ball
             return None
         to_ball = (view.ball_pos - pos)[:2]
         distance = float(np.hypot(*to_ball))
