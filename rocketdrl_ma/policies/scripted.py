@@ -249,8 +249,7 @@ class Rotator(ScriptedBot):
         pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         ball = rotation.ball_ahead(view)
         if role is Role.LAST:
-            behind = rotation.LAST_BEHIND_PAIR_UU if rotation.rotating_count(roles) <= 2 else rotation.LAST_BEHIND_UU
-            spot = rotation.cover_spot(ball, behind)
+            spot = rotation.last_man_spot(ball, roles)
         else:
             rank = sum(1 for a, r in roles.items() if r is Role.SECOND and a != agent and view.pos[a][1] > pos[1])
             spot = rotation.support_spot(ball, rank=1 + rank)

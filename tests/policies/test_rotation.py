@@ -44,16 +44,66 @@ def test_2v2_a_team_mate_level_with_or_upfield_of_the_ball_does_not_follow_up(ma
 
 
 def test_3v3_two_cars_rotate_and_the_third_presses():
-    view = _view({"blue_0": (0.0, -1000.0), "blue_1": (800.0, -2000.0), "blue_2": (0.0, -4500.0)}, ball=(0.0, 500.0))
+    view = _view({"blue_0": (0.0, -1000.0), "blue_1": (800.0, -2000.0), "blue_2": (0.0, -4500.0)}, ball=(0.0, -500.0))
     roles = rotation.assign_roles(view, None)
     assert roles == {"blue_0": Role.FIRST, "blue_1": Role.LAST, "blue_2": Role.PRESSER}
-    # two cars rotate as in 2v2: the last man goal-side of the ball follows up; the presser is no candidate
+    # two cars rotate as in 2v2: the last man goal-side of the ball in his own half follows up; the presser is no
+    # candidate
     assert rotation.follow_up(view, roles) == "blue_1"
     # the presser nearer the ball than both rotating cars is still the presser: roles go by number, not distance
     view = _view({"blue_0": (0.0, -1000.0), "blue_1": (2500.0, 2000.0), "blue_2": (0.0, 300.0)}, ball=(0.0, 500.0))
     roles = rotation.assign_roles(view, None)
     assert roles["blue_2"] is Role.PRESSER and roles["blue_0"] is Role.FIRST
     assert rotation.follow_up(view, roles) is None  # the last man upfield of the ball rotates back
+
+
+@pytest.mark.parametrize("size", [3, 4])
+def test_with_pressers_the_last_man_holds_the_halfway_line(size):
+    """A ball beyond the halfway line: in 2v2 the last man goal-side of it follows up and covers from 1500 uu behind
+    it; with pressers on the team he neither follows up nor goes further up the field than the line."""
+    pressers = {f"blue_{k}": (-2000.0 + 1000.0 * k, 3000.0) for k in range(2, size)}
+    for ball_y in (100.0, 2000.0, 4000.0):
+        mates = {"blue_0": (0.0, ball_y - 600.0), "blue_1": (800.0, -1500.0)}
+        pair = _view(mates, ball=(0.0, ball_y))
+        roles = rotation.assign_roles(pair, None)
+        assert roles["blue_1"] is Role.LAST and rotation.follow_up(pair, roles) == "blue_1"
+        assert rotation.last_man_spot(pair.ball_pos, roles)[1] == pytest.approx(ball_y - rotation.LAST_BEHIND_PAIR_UU)
+        team = _view({**mates, **pressers}, ball=(0.0, ball_y))
+        roles = rotation.assign_roles(team, None)
+        assert roles["blue_1"] is Role.LAST and rotation.has_pressers(roles)
+        assert rotation.follow_up(team, roles) is None
+        assert rotation.last_man_spot(team.ball_pos, roles)[1] == min(ball_y - rotation.LAST_BEHIND_PAIR_UU, 0.0)
+    # in his own half he follows up as in 2v2
+    team = _view({"blue_0": (0.0, -700.0), "blue_1": (800.0, -2000.0), **pressers}, ball=(0.0, -100.0))
+    assert rotation.follow_up(team, rotation.assign_roles(team, None)) == "blue_1"
+
+
+def test_the_3v3_last_man_waits_at_the_halfway_line_while_his_team_attacks():
+    """Real physics: the ball rests 1000 uu from the opponents' goal, an idle team there. In 3v3 the last man drives
+    up from his own half and stops at the halfway line; in 2v2 (no presser) the same car follows up beyond it.
+    Measured: furthest up the field -197 uu in 3v3, 2937 uu in 2v2."""
+    furthest_y = {}
+    for size in (2, 3):
+        m = Match(team_size=size, kickoff_countdown_s=0.0)
+        m.reset(np.random.default_rng(0))
+        spots = {"blue_0": (0.0, 2500.0), "blue_1": (-1000.0, -2500.0), "blue_2": (2500.0, 1500.0)}
+        for agent in (a for a in m.cars if a.startswith("blue")):
+            m.cars[agent].set_state(CarState(pos=np.array([*spots[agent], 17.0]), rot_mat=yaw_rot_mat(np.pi / 2),
+                                             on_ground=True))
+        for k, agent in enumerate(a for a in m.cars if a.startswith("orange")):
+            m.cars[agent].set_state(CarState(pos=np.array([-1500.0 + 1500.0 * k, 4700.0, 17.0]), on_ground=True))
+        m.arena.ball.set_state(BallState(pos=np.array([0.0, 4100.0, 93.0])))
+        rotator, idle = make_scripted("rotator"), make_scripted("idle")
+        state = m.game_state()
+        assert rotation.assign_roles(rotation.team_view("blue_1", state), None)["blue_1"] is Role.LAST
+        furthest_y[size] = -np.inf
+        for _ in range(60):  # 4 s
+            state = m.game_state()
+            if state.ball.pos[1] < 0.0:  # the ball back in the own half: the line no longer holds him
+                break
+            m.advance({a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}, 8)
+            furthest_y[size] = max(furthest_y[size], float(m.game_state().cars["blue_1"].pos[1]))
+    assert furthest_y[3] < 300.0 and furthest_y[2] > 1000.0, furthest_y
 
 
 def test_with_three_rotating_cars_the_second_man_follows_up_and_the_last_man_stays(monkeypatch):
