@@ -231,8 +231,8 @@ def rotating_count(roles: dict[str, Role]) -> int:
 
 
 def has_pressers(roles: dict[str, Role]) -> bool:
-    """Whether some of the team's cars press (3v3 and 4v4 outside kickoffs, while none of the rotating cars is
-    demoed)."""
+    """Whether some of the team's cars press: outside kickoffs, while the team has more live cars than
+    ``ROTATING_CARS`` (a demo in 3v3 leaves two, who both rotate)."""
     return any(r is Role.PRESSER for r in roles.values())
 
 

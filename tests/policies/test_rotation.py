@@ -72,7 +72,8 @@ def test_with_pressers_the_last_man_holds_the_halfway_line(size):
         roles = rotation.assign_roles(team, None)
         assert roles["blue_1"] is Role.LAST and rotation.has_pressers(roles)
         assert rotation.follow_up(team, roles) is None
-        assert rotation.last_man_spot(team.ball_pos, roles)[1] == min(ball_y - rotation.LAST_BEHIND_PAIR_UU, 0.0)
+        assert rotation.last_man_spot(team.ball_pos, roles)[1] == pytest.approx(
+            min(ball_y - rotation.LAST_BEHIND_PAIR_UU, rotation.LAST_MAN_LINE_Y_UU))
     # in his own half he follows up as in 2v2
     team = _view({"blue_0": (0.0, -700.0), "blue_1": (800.0, -2000.0), **pressers}, ball=(0.0, -100.0))
     assert rotation.follow_up(team, rotation.assign_roles(team, None)) == "blue_1"
