@@ -154,14 +154,13 @@ def test_killed_league_resumes_without_losing_or_duplicating(tmp_path):
 @pytest.mark.parametrize("league_yaml, trained, opponent", [
     ("leagues/selfplay_kickstart_vs_ball_chaser.yaml", "selfplay_kickstart", "ball_chaser"),
     pytest.param("leagues/selfplay_2v2_from_1v1_vs_ball_chaser.yaml", "selfplay_2v2_from_1v1", "ball_chaser",
-                 marks=pytest.mark.slow),
-    pytest.param("leagues/selfplay_3v3_from_2v2_vs_ball_chaser.yaml", "selfplay_3v3_from_2v2", "ball_chaser",
                  marks=pytest.mark.slow)])
 def test_a_delivered_policy_wins_its_first_league_match_on_either_side(league_yaml, trained, opponent):
-    """A committed self-play checkpoint (1v1, the 2v2 and 3v3 teams) in the first two full 5-minute matches of its
-    league (one per side): a change to physics, observations or the lookup table that breaks what it learned shows
-    up here. Against the ball-chasers only: against the rotators (the trained 2v2 team wins about 70 % of its matches,
-    the 3v3 rotators about 60 % against flip-chasers) a change to the scripted team flips single matches."""
+    """A committed self-play checkpoint (1v1, the 2v2 team) in the first two full 5-minute matches of its league (one
+    per side): a change to physics, observations or the lookup table that breaks what it learned shows up here.
+    Against the ball-chasers only: against the rotators (the trained 2v2 team wins about 70 % of its matches) a change
+    to the scripted team flips single matches. A seeded match is the same on one machine, but not on every machine:
+    the 2v2 team wins about 80 % of its matches, so a machine where one of these two is a loss is possible."""
     cfg = load_league_config(REPO / league_yaml)
     first_two = schedule(cfg)[:2]
     assert {m.blue for m in first_two} == {trained, opponent}
@@ -171,3 +170,26 @@ def test_a_delivered_policy_wins_its_first_league_match_on_either_side(league_ya
         goals = {match.blue: result.score_blue, match.orange: result.score_orange}
         assert result.duration_s >= 300.0
         assert goals[trained] > goals[opponent], (match.key, goals)
+
+
+@pytest.mark.slow
+def test_the_delivered_3v3_team_outscores_ball_chasers_over_its_first_ten_league_matches():
+    """The 3v3 team (policies/checkpoints/selfplay_3v3_from_2v2.pt) wins about 80 % of its full matches against three
+    ball-chasers: one seeded match is a coin that lands differently on another machine (its first league match is a
+    1-2 loss on some and was a win on others), so this test sums ten. In the league's first ten matches (five per
+    side) the team scored 24 goals more than it conceded on the machine that wrote this; per match the difference was
+    +1.75 with a standard deviation of 2.5 over twenty, which puts a machine where the sum of ten is not positive
+    near 1 %. With its observation shifted by three entries (what a broken observation builder does) it lost all ten,
+    5 - 53."""
+    cfg = load_league_config(REPO / "leagues/selfplay_3v3_from_2v2_vs_ball_chaser.yaml")
+    first_ten = schedule(cfg)[:10]
+    assert sorted(m.blue for m in first_ten) == sorted(["selfplay_3v3_from_2v2", "ball_chaser"] * 5)
+    with two_processes() as pool:
+        results = list(pool.map(play_local, repeat(cfg), first_ten))
+    scored = conceded = 0
+    for match, result in zip(first_ten, results):
+        assert result.duration_s >= 300.0
+        team_is_blue = match.blue == "selfplay_3v3_from_2v2"
+        scored += result.score_blue if team_is_blue else result.score_orange
+        conceded += result.score_orange if team_is_blue else result.score_blue
+    assert scored > conceded, (scored, conceded)
