@@ -75,6 +75,10 @@ class VectorEnv:
         """Reset every arena (arena ``k`` with ``seed + k``); returns observations and each arena's infos."""
         seed = check_seed(seed)
         infos = [self._reset_lane(k, None if seed is None else seed + k) for k in range(self.n_arenas)]
+        if seed is not None:
+            # The lanes have put every car for the new episodes: a new PyBullet world with them (and none of the
+            # old one's contact caches) makes a used VectorEnv replay what a new one plays from this seed.
+            self.batch.renew_bullet_world()
         return self._obs.copy(), infos
 
     def reset_arenas(self, mask: np.ndarray, seed: int | None = None) -> tuple[np.ndarray, list[dict | None]]:

@@ -272,6 +272,16 @@ class Arena:
             raise ValueError(f"step: this arena is one of an ArenaBatch of {self._batch.n_arenas}; step the batch")
         self._batch.step(ticks)
 
+    def renew_world(self) -> None:
+        """Move this arena onto a new PyBullet world with the same cars and settings and none of Bullet's memory of
+        earlier ticks (``PhysicsWorld.renew_bullet_world``), before every car is set for a new episode: a used
+        arena then replays exactly what a new one plays from the same states. An arena of an ``ArenaBatch`` shares
+        its world with the others: renew the batch."""
+        if self._batch.n_arenas != 1:
+            raise ValueError(f"renew_world: this arena is one of an ArenaBatch of {self._batch.n_arenas}; "
+                             f"renew the batch (ArenaBatch.renew_bullet_world)")
+        self._batch.renew_bullet_world()
+
     def reseed(self, seed: int) -> None:
         """Restart this arena's own random stream (respawn spots, unseeded kickoffs) as ``Arena(seed=seed)`` starts it."""
         self._batch.arena_rngs[self.index] = np.random.default_rng(seed)

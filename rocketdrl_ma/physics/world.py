@@ -252,9 +252,34 @@ class PhysicsWorld:
         finally:
             os.unlink(path)
 
-    def _restore_world(self, snapshot: bytes) -> None:
-        """Connect to a new PyBullet world: the static world, the logged bodies made again in their order (so they
-        get the same ids), then ``snapshot`` restored onto them."""
+    def renew_bullet_world(self) -> None:
+        """Move onto a new PyBullet world: the same bodies with the same ids, settings and demolitions, the static
+        boxes where they are, every car where its arrays say, and none of Bullet's memory of earlier ticks.
+
+        Bullet keeps contact manifolds, the order of their points and a broadphase that prunes stale pairs a few per
+        tick from a cursor; a used world carries them into every later tick, so a game played on it drifts apart
+        from the same game on a new world after a few hundred decisions. Made for the start of an episode: a car
+        put somewhere since the last tick (``set_car``; a reset puts every car) is put there again exactly, and the
+        world then plays on exactly as a newly made one with the same cars put the same way. A car that has moved
+        on its own since it was put carries over to float rounding (its pose read back from metres)."""
+        old_client = self.client
+        self._read_state()
+        self._remake_bodies()
+        pb.disconnect(old_client)
+        for box_id, row in self._static_boxes.items():
+            arena, center = int(row[0]), row[1:4]
+            pb.resetBasePositionAndOrientation(box_id, ((center + self.origins[arena]) * M_PER_UU).tolist(),
+                                               (0, 0, 0, 1), physicsClientId=self.client)
+        for slot in self._slots:
+            k = slot.index
+            if self.cs[k, CS_IS_DEMOED]:
+                self._take_out_of_play(slot.body)
+            self.set_car(slot.car_id, self.car_pos[k].copy(), self.car_rot[k].copy(), self.car_vel[k].copy(),
+                         self.car_ang_vel[k].copy())
+
+    def _remake_bodies(self) -> None:
+        """Connect to a new PyBullet world: the static world, then the logged bodies made again in their order (so
+        they get the same ids)."""
         kept = {key: getattr(self, key) for key in ("_static_bodies", "_static_set", "_body_log")}
         self._body_log = []
         self._connect()
@@ -267,8 +292,12 @@ class PhysicsWorld:
                 self._remove_body(entry[1])
                 continue
             if body != entry[1]:
-                raise RuntimeError(f"PhysicsWorld copy: body {entry[1]} came back as {body}")
+                raise RuntimeError(f"PhysicsWorld: body {entry[1]} came back as {body} in the new PyBullet world")
         self.__dict__.update(kept)
+
+    def _restore_world(self, snapshot: bytes) -> None:
+        """Connect to a new PyBullet world with the same bodies, then restore ``snapshot`` onto them."""
+        self._remake_bodies()
         fd, path = tempfile.mkstemp(suffix=".bullet")
         try:
             os.write(fd, snapshot)
@@ -303,15 +332,12 @@ class PhysicsWorld:
         body = self._create_car_body(arena, cfg)
         slot = _CarSlot(self._next_car_id, arena, team, cfg, body)
         self._next_car_id += 1
-        self._state_fresh = False  # the arrays are rebuilt from the bodies
-        self._read_state()
+        old = self._snapshot_car_arrays()
         self._slots.append(slot)
         self._slot_by_body[body] = slot
         self._slot_by_id[slot.car_id] = slot
-        old = self._snapshot_car_arrays()
         self._rebuild_car_arrays(old)
         self.cs[slot.index, CS_BOOST] = self._mutators[arena].car_spawn_boost
-        self._read_state()
         return slot.car_id
 
     def _create_car_body(self, arena: int, cfg: CarConfig) -> int:
@@ -335,7 +361,6 @@ class PhysicsWorld:
 
     def remove_car(self, car_id: int) -> None:
         slot = self._slot(car_id)
-        self._read_state()
         old = self._snapshot_car_arrays()
         self._remove_body(slot.body)
         self._slots.remove(slot)
@@ -347,8 +372,13 @@ class PhysicsWorld:
         self._rebuild_car_arrays(old)
 
     def _snapshot_car_arrays(self) -> dict[int, tuple]:
-        return {s.car_id: (self.cs[s.index].copy(), self.controls[s.index].copy(), self.last_extra_hit_tick[s.index])
-                for s in self._slots if s.index >= 0}
+        """Each car's rows, to carry over a rebuild of the arrays: its pose and velocities as they are (not read
+        back from PyBullet, which rounds a pose that was just set), its state memory, controls and extra-hit tick."""
+        self._read_state()
+        return {s.car_id: (self.car_pos[k].copy(), self.car_quat[k].copy(), self.car_rot[k].copy(),
+                           self.car_vel[k].copy(), self.car_ang_vel[k].copy(), self.cs[k].copy(),
+                           self.controls[k].copy(), self.last_extra_hit_tick[k])
+                for s in self._slots if (k := s.index) >= 0}
 
     def _rebuild_car_arrays(self, old: dict[int, tuple] | None = None) -> None:
         n = len(self._slots)
@@ -383,11 +413,19 @@ class PhysicsWorld:
         self.three_wheel = np.array([s.config.three_wheel for s in self._slots], dtype=np.bool_)
         self._car_bodies = [s.body for s in self._slots]
         self._car_rows = np.arange(n, dtype=np.int64)
+        added = []
         for k, s in enumerate(self._slots):
             s.index = k
             if old and s.car_id in old:
-                self.cs[k], self.controls[k], self.last_extra_hit_tick[k] = old[s.car_id]
-        self._state_fresh = False
+                (self.car_pos[k], self.car_quat[k], self.car_rot[k], self.car_vel[k], self.car_ang_vel[k], self.cs[k],
+                 self.controls[k], self.last_extra_hit_tick[k]) = old[s.car_id]
+            else:
+                added.append(k)
+        if added:
+            unpack_rows(read_rows([self._slots[k].body for k in added], self.client), np.array(added, dtype=np.int64),
+                        self.origins, self.car_arena, self.car_pos, self.car_quat, self.car_rot, self.car_vel,
+                        self.car_ang_vel)
+        self._state_fresh = True
 
     def _slot(self, car_id: int) -> _CarSlot:
         slot = self._slot_by_id.get(car_id)
@@ -639,13 +677,15 @@ class PhysicsWorld:
         k = s.index
         self.cs[k, CS_IS_DEMOED] = 1.0
         self.cs[k, CS_DEMO_TIMER] = self._mutators[s.arena].respawn_delay_s
-        cid = self.client
-        # A demoed car leaves the world: no collisions, no gravity, until it respawns.
-        pb.setCollisionFilterGroupMask(s.body, -1, 0, 0, physicsClientId=cid)
-        pb.changeDynamics(s.body, -1, mass=0.0, physicsClientId=cid)
-        pb.resetBaseVelocity(s.body, [0, 0, 0], [0, 0, 0], physicsClientId=cid)
+        self._take_out_of_play(s.body)
+        pb.resetBaseVelocity(s.body, [0, 0, 0], [0, 0, 0], physicsClientId=self.client)
         self.car_vel[k] = 0.0
         self.car_ang_vel[k] = 0.0
+
+    def _take_out_of_play(self, body: int) -> None:
+        """A demoed car leaves the world: no collisions, no gravity, until it respawns."""
+        pb.setCollisionFilterGroupMask(body, -1, 0, 0, physicsClientId=self.client)
+        pb.changeDynamics(body, -1, mass=0.0, physicsClientId=self.client)
 
     def respawn(self, car_id: int) -> None:
         s = self._slot(car_id)

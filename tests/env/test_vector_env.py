@@ -102,3 +102,27 @@ def test_bad_input_names_the_field():
     with pytest.raises(ValueError, match="mask"):
         vec.reset_arenas(np.ones(3, bool))
     vec.close()
+
+
+def test_a_used_vector_env_replays_a_new_ones_games_after_a_seeded_reset():
+    """A seeded reset moves the batch onto a new PyBullet world: 400 decisions of four colliding cars in each of two
+    arenas, after 300 of other games, come out as a new VectorEnv plays them."""
+    overrides = {"kickoff_countdown_s": 0.0}
+    used, new = VectorEnv("matches/2v2.yaml", n_arenas=2, **overrides), VectorEnv("matches/2v2.yaml", n_arenas=2,
+                                                                                    **overrides)
+    space = used.action_space
+    rng = np.random.default_rng(4)
+
+    def random_actions() -> np.ndarray:
+        return rng.uniform(space.low, space.high, (2, used.n_agents) + space.shape).astype(np.float32)
+
+    used.reset(seed=1)
+    for _ in range(300):
+        used.step(random_actions())
+    obs = [used.reset(seed=SEED)[0], new.reset(seed=SEED)[0]]
+    for step in range(400):
+        np.testing.assert_array_equal(obs[0], obs[1], err_msg=f"decision {step}")
+        actions = random_actions()
+        obs = [used.step(actions)[0], new.step(actions)[0]]
+    used.close()
+    new.close()
