@@ -137,8 +137,8 @@ class RocketDRLParallelEnv(ParallelEnv):
         if seed is not None or self._rng is None:
             self._rng = np.random.default_rng(seed)
             self._action_space.seed(seed)
-        # A seeded reset of a used lone env renews its PyBullet world (about 18 ms in 3v3) so that it replays a fresh env's
-        # game exactly; a VectorEnv renews its shared batch itself.
+        # A seeded reset of a used lone env renews its PyBullet world (about 18 ms in 3v3) so that it replays a fresh
+        # env's game exactly; a VectorEnv renews its shared batch itself.
         self.rules.reset(self._rng, renew_world=seed is not None and self.rules.arena_factory is None)
         self.agents = list(self.possible_agents)
         self._cycles = 0
