@@ -108,9 +108,10 @@ def _rotators_and_flip_chasers(env) -> dict:
 
 @pytest.mark.slow
 def test_a_used_3v3_env_replays_a_fresh_envs_whole_match_after_a_seeded_reset():
-    """Six cars on walls and in one another for a whole match, after 600 decisions of another game: on the same
-    PyBullet world the replay drifted apart at decision 756 (Bullet's contact caches and broadphase history carried
-    over) and, with a car demoed when the old game ended, at decision 130 (its respawn drew from the new stream)."""
+    """Six cars on walls and in one another for a whole match, after 600 decisions of another game. On the same
+    PyBullet world this replay drifted apart at decision 756: Bullet's contact caches and broadphase history carried
+    over. (After a 100-decision warm-up that ended with a car demoed, it parted at decision 130: that car's respawn
+    drew from the new game's stream; the next test checks that on its own.)"""
     used, fresh = rocketdrl_ma.parallel_env("matches/3v3.yaml"), rocketdrl_ma.parallel_env("matches/3v3.yaml")
     used.reset(seed=5)
     warm_up = _rotators_and_flip_chasers(used)
