@@ -137,9 +137,12 @@ class RocketDRLParallelEnv(ParallelEnv):
         if seed is not None or self._rng is None:
             self._rng = np.random.default_rng(seed)
             self._action_space.seed(seed)
-        # A seeded reset of a used lone env renews its PyBullet world (about 18 ms in 3v3) so that it replays a fresh
-        # env's game exactly; a VectorEnv renews its shared batch itself.
-        self.rules.reset(self._rng, renew_world=seed is not None and self.rules.arena_factory is None)
+        used = self.rules.arena is not None
+        self.rules.reset(self._rng)
+        if seed is not None and used and self.rules.arena_factory is None:
+            # The rules have put every car: a new PyBullet world with them (about 18 ms in 3v3) makes a used lone env
+            # replay a fresh env's game exactly. A VectorEnv renews its shared batch itself, the same way.
+            self.rules.arena.renew_world()
         self.agents = list(self.possible_agents)
         self._cycles = 0
         self._frames = []

@@ -274,9 +274,9 @@ class Arena:
 
     def renew_world(self) -> None:
         """Move this arena onto a new PyBullet world with the same cars and settings and none of Bullet's memory of
-        earlier ticks (``PhysicsWorld.renew_bullet_world``), before every car is set for a new episode: a used
-        arena then replays exactly what a new one plays from the same states. An arena of an ``ArenaBatch`` shares
-        its world with the others: renew the batch."""
+        earlier ticks (``PhysicsWorld.renew_bullet_world``), after every car is set for a new episode: a used arena
+        then replays exactly what a new one plays from the same states. An arena of an ``ArenaBatch`` shares its
+        world with the others: renew the batch."""
         if self._batch.n_arenas != 1:
             raise ValueError(f"renew_world: this arena is one of an ArenaBatch of {self._batch.n_arenas}; "
                              f"renew the batch (ArenaBatch.renew_bullet_world)")

@@ -267,15 +267,12 @@ class PhysicsWorld:
         self._remake_bodies()
         pb.disconnect(old_client)
         for box_id, row in self._static_boxes.items():
-            arena, center = int(row[0]), row[1:4]
-            pb.resetBasePositionAndOrientation(box_id, ((center + self.origins[arena]) * M_PER_UU).tolist(),
-                                               (0, 0, 0, 1), physicsClientId=self.client)
+            self._place_static_box(box_id, int(row[0]), row[1:4])
         for slot in self._slots:
             k = slot.index
             if self.cs[k, CS_IS_DEMOED]:
                 self._take_out_of_play(slot.body)
-            self.set_car(slot.car_id, self.car_pos[k].copy(), self.car_rot[k].copy(), self.car_vel[k].copy(),
-                         self.car_ang_vel[k].copy())
+            self.set_car(slot.car_id, self.car_pos[k], self.car_rot[k], self.car_vel[k], self.car_ang_vel[k])
 
     def _remake_bodies(self) -> None:
         """Connect to a new PyBullet world: the static world, then the logged bodies made again in their order (so
@@ -371,16 +368,18 @@ class PhysicsWorld:
                 other.contact_id = None
         self._rebuild_car_arrays(old)
 
-    def _snapshot_car_arrays(self) -> dict[int, tuple]:
-        """Each car's rows, to carry over a rebuild of the arrays: its pose and velocities as they are (not read
-        back from PyBullet, which rounds a pose that was just set), its state memory, controls and extra-hit tick."""
-        self._read_state()
-        return {s.car_id: (self.car_pos[k].copy(), self.car_quat[k].copy(), self.car_rot[k].copy(),
-                           self.car_vel[k].copy(), self.car_ang_vel[k].copy(), self.cs[k].copy(),
-                           self.controls[k].copy(), self.last_extra_hit_tick[k])
-                for s in self._slots if (k := s.index) >= 0}
+    #: the per-car arrays a rebuild carries over: the pose and velocities as they are (not read back from PyBullet,
+    #: which rounds a pose that was just set), the state memory, controls and extra-hit tick
+    _CARRIED_CAR_ARRAYS = ("car_pos", "car_quat", "car_rot", "car_vel", "car_ang_vel", "cs", "controls",
+                           "last_extra_hit_tick")
 
-    def _rebuild_car_arrays(self, old: dict[int, tuple] | None = None) -> None:
+    def _snapshot_car_arrays(self) -> dict[int, dict[str, np.ndarray]]:
+        """Each car's rows of ``_CARRIED_CAR_ARRAYS``, to carry over a rebuild of the arrays."""
+        self._read_state()
+        return {s.car_id: {name: getattr(self, name)[s.index].copy() for name in self._CARRIED_CAR_ARRAYS}
+                for s in self._slots if s.index >= 0}
+
+    def _rebuild_car_arrays(self, old: dict[int, dict[str, np.ndarray]] | None = None) -> None:
         n = len(self._slots)
         self.car_pos = np.zeros((n, 3))
         self.car_rot = np.zeros((n, 3, 3))
@@ -417,8 +416,8 @@ class PhysicsWorld:
         for k, s in enumerate(self._slots):
             s.index = k
             if old and s.car_id in old:
-                (self.car_pos[k], self.car_quat[k], self.car_rot[k], self.car_vel[k], self.car_ang_vel[k], self.cs[k],
-                 self.controls[k], self.last_extra_hit_tick[k]) = old[s.car_id]
+                for name, row in old[s.car_id].items():
+                    getattr(self, name)[k] = row
             else:
                 added.append(k)
         if added:
@@ -748,10 +747,13 @@ class PhysicsWorld:
         """Put a static box's centre at ``center_uu`` (between rounds; it does not sweep through bodies)."""
         arena = self._static_box_arena(box_id)
         center = _box_vector("center_uu", center_uu)
-        pb.resetBasePositionAndOrientation(box_id, ((center + self.origins[arena]) * M_PER_UU).tolist(),
-                                           (0, 0, 0, 1), physicsClientId=self.client)
+        self._place_static_box(box_id, arena, center)
         self._static_boxes[box_id][1:4] = center
         self._stack_boxes()
+
+    def _place_static_box(self, box_id: int, arena: int, center: np.ndarray) -> None:
+        pb.resetBasePositionAndOrientation(box_id, ((center + self.origins[arena]) * M_PER_UU).tolist(),
+                                           (0, 0, 0, 1), physicsClientId=self.client)
 
     def remove_static_box(self, box_id: int) -> None:
         self._static_box_arena(box_id)

@@ -116,10 +116,7 @@ class Rules(ABC):
             self.cars[agent] = car
             self._agent_by_car_id[car.id] = agent
 
-    def reset(self, rng: np.random.Generator, renew_world: bool = False) -> None:
-        """Start an episode. ``renew_world``: a used lone arena first moves onto a new PyBullet world
-        (``Arena.renew_world``), so that the episode replays, tick for tick, what a newly built env plays from the
-        same rng; the env asks for it on a reset with a seed."""
+    def reset(self, rng: np.random.Generator) -> None:
         # Drawn on every reset, not only the first, so that reset(seed=s) of a used env replays a fresh env's game.
         arena_seed = int(rng.integers(1 << 31))
         if self.arena is None:
@@ -131,8 +128,6 @@ class Rules(ABC):
             for car in self.cars.values():
                 if car.get_state().is_demoed:
                     car.respawn()
-            if renew_world:
-                self.arena.renew_world()
             self.arena.reseed(arena_seed)
         for car in self.cars.values():
             car.set_controls(NEUTRAL)
