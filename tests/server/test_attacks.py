@@ -140,8 +140,9 @@ def test_defence_in_depth_without_any_authentication(running, procs):
     """The loopback default: no Zenoh users, so the hostile sees and may publish anything. Signatures,
     MACs, sequence numbers and the verified lobby still stop every attack."""
     running.lobby.create("matches/1v1.yaml", "open", overrides=GAME, ready_timeout_s=60)
+    # the hostile attacks until the match is over, however long joining takes on a loaded machine
     hostile = start_hostile(procs, "test", "open", "guest", "blue_0", "--connect", running.endpoint,
-                            "--rounds", "600", "--period-s", "0.005")
+                            "--rounds", "100000", "--period-s", "0.005")
     # a client that trusts on first use now hears two different keys answer as 'test': it refuses both
     tofu = running.client(key_dir="/nonexistent", server_key=None)
     with pytest.raises(ValueError, match="2 different keys answer as server 'test'"):
@@ -153,6 +154,7 @@ def test_defence_in_depth_without_any_authentication(running, procs):
     reports = play_both({"match": "open", "client": running.client_settings},
                         {"match": "open", "client": running.client_settings})
     states, end = watcher.result()
+    hostile.popen.terminate()
     got = hostile_result(hostile)
     info = running.lobby.inspect("open")
     # the hostile did see and answer everything ...
@@ -164,8 +166,8 @@ def test_defence_in_depth_without_any_authentication(running, procs):
     assert watcher.spectator.dropped["bad_signature"] > 0 and watcher.spectator.dropped["malformed"] > 0
     blue = reports["blue_0"]
     assert blue.reason == "finished" and blue.summary == info["summary"]
-    assert blue.dropped["bad_signature"] > 0 and blue.dropped["malformed"] > 0  # forged and unsigned `done`s
-    assert sum(blue.dropped.values()) >= got["forged_obs"] // 4
+    # forged and unsigned `done`s, and old real observations replayed: each kind reached blue and was dropped
+    assert blue.dropped["bad_signature"] > 0 and blue.dropped["malformed"] > 0 and blue.dropped["stale"] > 0
     assert_no_forged_control(states)
     assert info["rejected"]["bad_mac"] > 0  # the forged actions reached the server and were refused
     slot = info["slot_status"]["blue_0"]
