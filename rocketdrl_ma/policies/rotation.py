@@ -26,7 +26,7 @@ kickoffs two cars rotate, the two lowest-numbered live ones (a demoed car's plac
 A car that is not first and has to come back (its spot is behind it) takes an active boost pad on the way when it
 is short of boost and the pad costs little of a detour: the boost collected on the way back.
 
-At a kickoff the two nearest cars go (in 3v3 and 4v4 only the nearest, from some layouts: ``KICKOFF_ALONE``). The
+At a kickoff the two nearest cars go (only the nearest from some layouts: ``KICKOFF_ALONE``). The
 second one aims beside the ball, how far depending on the kickoff layout (``kickoff_aim``): it meets the ball just
 after the collision at the centre and sends it on towards the opponents' goal, which chasers who all went for the
 ball have left empty.
@@ -87,25 +87,26 @@ class KickoffLane(Enum):
 #: bearings (deg off the long axis) that separate the kickoff lanes
 DIAGONAL_BEARING_DEG, OFF_CENTRE_BEARING_DEG = 20.0, 1.0
 #: how far beside the ball (uu along x, towards the car's own side when positive) the second kickoff taker aims, by
-#: team size (2; 3 and more) and the lanes of the first and second taker. Searched per layout against flip-chasers
-#: with the real 3 s countdown, over every 2v2 and 3v3 kickoff layout from both ends, the 3v3 ones also at each of
-#: the 8 decision phases a kickoff after a goal can start at (README, "Team play"); aiming at the ball's centre as
-#: the first taker does, the second car's touch sends the ball towards a corner. With three or more cars the two
-#: nearest are never the back spot's.
+#: team size (2; 3 and more) and the lanes of the first and second taker; a layout not listed aims at the ball's
+#: centre. Searched against flip-chasers with the real 3 s countdown over every kickoff a match can have: each layout
+#: from both ends at each of the 8 decision phases a kickoff after a goal can start at, phase 0 (every match's first
+#: kickoff) counted at its weight in a match (README, "Team play"). Aiming at the ball's centre as the first taker
+#: does, the second car's touch sends the ball towards a corner. With three or more cars the two nearest are never
+#: the back spot's.
 KICKOFF_SECOND_AIM_UU: dict[int, dict[tuple[KickoffLane, KickoffLane], float]] = {
     2: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -80.0,
-        (KickoffLane.DIAGONAL, KickoffLane.BACK): -200.0,
-        (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 300.0,
-        (KickoffLane.OFF_CENTRE, KickoffLane.BACK): -100.0,
-        (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): -200.0},
+        (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 50.0,
+        (KickoffLane.OFF_CENTRE, KickoffLane.BACK): 150.0,
+        (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): 50.0},
     3: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -120.0,
         (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): -150.0},
 }
 #: layouts (lanes of the two cars nearest the ball) where, by team size, only the nearest car takes the kickoff and
-#: the other stays back as a second man, searched with the offsets above: in 3v3 and 4v4 when both come from the
-#: off-centre spots. The lanes are read each decision, and the car staying back drives into the back lane.
+#: the other stays back, searched with the offsets above: in 2v2 a diagonal spot with the back spot's car (the back
+#: car covers as last man), in 3v3 and 4v4 when both come from the off-centre spots (the other waits as second man).
+#: The lanes are read each decision, and the car staying back drives into the back lane.
 KICKOFF_ALONE: dict[int, frozenset[tuple[KickoffLane, KickoffLane]]] = {
-    2: frozenset(),
+    2: frozenset({(KickoffLane.DIAGONAL, KickoffLane.BACK)}),
     3: frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE), (KickoffLane.OFF_CENTRE, KickoffLane.BACK),
                   (KickoffLane.BACK, KickoffLane.OFF_CENTRE)})}
 

@@ -146,6 +146,9 @@ def test_no_follow_up_and_no_presser_at_a_kickoff():
     view = _view({"blue_0": (0.0, -4608.0), "blue_1": (-2048.0, -2560.0), "blue_2": (256.0, -3840.0)}, ball=(0.0, 0.0),
                  ball_vel=(0.0, 0.0))
     assert rotation.assign_roles(view, None) == {"blue_0": Role.LAST, "blue_1": Role.FIRST, "blue_2": Role.FIRST}
+    # 2v2 from a diagonal spot and the back spot (a KICKOFF_ALONE layout): the diagonal car goes alone, the other covers
+    view = _view({"blue_0": (0.0, -4608.0), "blue_1": (2048.0, -2560.0)}, ball=(0.0, 0.0), ball_vel=(0.0, 0.0))
+    assert rotation.assign_roles(view, None) == {"blue_0": Role.LAST, "blue_1": Role.FIRST}
     # 3v3 from both off-centre spots (a KICKOFF_ALONE layout): the nearer takes it alone, the other waits as second man
     view = _view({"blue_0": (0.0, -4608.0), "blue_1": (256.0, -3840.0), "blue_2": (-256.0, -3840.0)}, ball=(0.0, 0.0),
                  ball_vel=(0.0, 0.0))
@@ -285,8 +288,8 @@ def test_rotator_controls_are_rows_of_the_lookup_table(size):
 
 @pytest.mark.parametrize("first, second, aside_uu", [
     ((2048.0, -2560.0), (256.0, -3840.0), -80.0),   # diagonal, then off-centre (on the +x side): -80 uu
-    ((-2048.0, -2560.0), (0.0, -4608.0), -200.0),   # diagonal, then back (on the axis counts as +x): -200 uu
-    ((256.0, -3840.0), (-256.0, -3840.0), 200.0),   # off-centre twice (a tie to the lower name), -200 uu on -x
+    ((-256.0, -3840.0), (0.0, -4608.0), 150.0),     # off-centre, then back (on the axis counts as +x): 150 uu
+    ((256.0, -3840.0), (-256.0, -3840.0), -50.0),   # off-centre twice (a tie to the lower name), 50 uu on -x
 ])
 def test_the_second_kickoff_taker_aims_beside_the_ball_by_the_layout(first, second, aside_uu):
     """Lanes by bearing from the centre spot; the first taker aims at the ball, the second beside it."""
@@ -359,12 +362,13 @@ def _kickoff_goals(team_size: int, second_aim_tables: list[dict], horizon_s: flo
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("team_size, at_least, at_most_against, margin", [(2, 7, 1, 2), (3, 8, 4, 14)])
+@pytest.mark.parametrize("team_size, at_least, at_most_against, margin", [(2, 9, 1, 2), (3, 8, 4, 14)])
 def test_the_rotators_kickoff_scores_where_aiming_at_the_ball_does_not(team_size, at_least, at_most_against, margin):
     """Measured, scored - conceded within 12 s, each layout from both ends at one decision phase each: 2v2 (40
-    kickoffs) 9 - 0, with both takers aiming at the ball's centre 5 - 0; 3v3 (120 kickoffs, the presser playing
-    from the first touch on) 10 - 2, at the centre 7 - 19. (2v2 all at phase 0, as a match's first kickoff: 22 - 0
-    and 4 - 0; 3v3 over all 8 phases of its 960 kickoffs: 89 - 18, README "Kickoffs after a goal".)"""
+    kickoffs) 11 - 0, with both takers aiming at the ball's centre 8 - 0 (a diagonal car beside the back spot's goes
+    alone in both); 3v3 (120 kickoffs, the presser playing from the first touch on) 10 - 2, at the centre 7 - 19.
+    (2v2 over all 8 phases of its 320 kickoffs: 61 - 3; 3v3 over all 8 phases of its 960 kickoffs: 89 - 18, README
+    "Kickoffs after a goal".)"""
     tuned, centre = _kickoff_goals(team_size, [rotation.KICKOFF_SECOND_AIM_UU, {2: {}, 3: {}}], horizon_s=12.0)
     assert tuned[0] >= at_least and tuned[1] <= at_most_against, tuned
     assert tuned[0] - tuned[1] >= centre[0] - centre[1] + margin, (tuned, centre)
