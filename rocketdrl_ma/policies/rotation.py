@@ -87,18 +87,20 @@ class KickoffLane(Enum):
 #: bearings (deg off the long axis) that separate the kickoff lanes
 DIAGONAL_BEARING_DEG, OFF_CENTRE_BEARING_DEG = 20.0, 1.0
 #: how far beside the ball (uu along x, towards the car's own side when positive) the second kickoff taker aims, by
-#: team size (2; 3 and more) and the lanes of the first and second taker; a layout not listed aims at the ball's
+#: team size (2, 3, 4) and the lanes of the first and second taker; a layout not listed aims at the ball's
 #: centre. Searched against flip-chasers with the real 3 s countdown over every kickoff a match can have: each layout
 #: from both ends at each of the 8 decision phases a kickoff after a goal can start at, phase 0 (every match's first
 #: kickoff) counted at its weight in a match (README, "Team play"). Aiming at the ball's centre as the first taker
 #: does, the second car's touch sends the ball towards a corner. With three or more cars the two nearest are never
-#: the back spot's.
+#: the back spot's. 3v3 and 4v4 each have their own optimum: 4v4 with 3v3's 90 uu lost most of its kickoff goals.
 KICKOFF_SECOND_AIM_UU: dict[int, dict[tuple[KickoffLane, KickoffLane], float]] = {
     2: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -80.0,
         (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): 50.0,
         (KickoffLane.OFF_CENTRE, KickoffLane.BACK): 150.0,
         (KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE): 50.0},
-    3: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -120.0,
+    3: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -90.0,
+        (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): -150.0},
+    4: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -120.0,
         (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): -150.0},
 }
 #: layouts (lanes of the two cars nearest the ball) where, by team size, only the nearest car takes the kickoff and
@@ -107,8 +109,8 @@ KICKOFF_SECOND_AIM_UU: dict[int, dict[tuple[KickoffLane, KickoffLane], float]] =
 #: The lanes are read each decision, and the car staying back drives into the back lane.
 KICKOFF_ALONE: dict[int, frozenset[tuple[KickoffLane, KickoffLane]]] = {
     2: frozenset({(KickoffLane.DIAGONAL, KickoffLane.BACK)}),
-    3: frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE), (KickoffLane.OFF_CENTRE, KickoffLane.BACK),
-                  (KickoffLane.BACK, KickoffLane.OFF_CENTRE)})}
+    3: frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE)}),
+    4: frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE)})}
 
 
 @dataclass(frozen=True)
@@ -169,9 +171,9 @@ def kickoff_lane(pos: np.ndarray) -> KickoffLane:
 
 def kickoff_layout(view: TeamView, order: list[str]) -> tuple[int, tuple[KickoffLane, KickoffLane]]:
     """The keys of the kickoff tables (``KICKOFF_SECOND_AIM_UU``, ``KICKOFF_ALONE``) for a team of two or more cars
-    (``order``: ``kickoff_takers(view)``): its team size (3 for three and more) and the lanes of its two nearest
-    cars, read from their positions now."""
-    return min(len(order), 3), (kickoff_lane(view.pos[order[0]]), kickoff_lane(view.pos[order[1]]))
+    (``order``: ``kickoff_takers(view)``): its team size (2, 3 or 4) and the lanes of its two nearest cars, read from
+    their positions now."""
+    return len(order), (kickoff_lane(view.pos[order[0]]), kickoff_lane(view.pos[order[1]]))
 
 
 def kickoff_taker_count(view: TeamView, order: list[str]) -> int:

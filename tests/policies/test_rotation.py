@@ -300,7 +300,7 @@ def test_the_second_kickoff_taker_aims_beside_the_ball_by_the_layout(first, seco
 
 
 @pytest.mark.parametrize("first, second, aside_uu", [
-    ((2048.0, -2560.0), (256.0, -3840.0), -120.0),  # diagonal, then off-centre (on the +x side)
+    ((2048.0, -2560.0), (256.0, -3840.0), -90.0),   # diagonal, then off-centre (on the +x side)
     ((-2048.0, -2560.0), (2048.0, -2560.0), -150.0),  # diagonal twice (a tie to the lower name), on the +x side
 ])
 def test_a_3v3_team_has_its_own_kickoff_offsets(first, second, aside_uu):
@@ -366,9 +366,9 @@ def _kickoff_goals(team_size: int, second_aim_tables: list[dict], horizon_s: flo
 def test_the_rotators_kickoff_scores_where_aiming_at_the_ball_does_not(team_size, at_least, at_most_against, margin):
     """Measured, scored - conceded within 12 s, each layout from both ends at one decision phase each: 2v2 (40
     kickoffs) 11 - 0, with both takers aiming at the ball's centre 8 - 0 (a diagonal car beside the back spot's goes
-    alone in both); 3v3 (120 kickoffs, the presser playing from the first touch on) 10 - 2, at the centre 7 - 19.
-    (2v2 over all 8 phases of its 320 kickoffs: 61 - 3; 3v3 over all 8 phases of its 960 kickoffs: 89 - 18, README
-    "Kickoffs after a goal".)"""
+    alone in both); 3v3 (120 kickoffs, the presser playing from the first touch on) 13 - 2, at the centre 7 - 16.
+    (Over all 8 phases, 2v2's 320 kickoffs: 61 - 3; 3v3's 960: 92 - 42. README "Kickoffs searched at a match's
+    weights".)"""
     tuned, centre = _kickoff_goals(team_size, [rotation.KICKOFF_SECOND_AIM_UU, {2: {}, 3: {}}], horizon_s=12.0)
     assert tuned[0] >= at_least and tuned[1] <= at_most_against, tuned
     assert tuned[0] - tuned[1] >= centre[0] - centre[1] + margin, (tuned, centre)
