@@ -103,14 +103,14 @@ KICKOFF_SECOND_AIM_UU: dict[int, dict[tuple[KickoffLane, KickoffLane], float]] =
     4: {(KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE): -120.0,
         (KickoffLane.DIAGONAL, KickoffLane.DIAGONAL): -150.0},
 }
+_BOTH_OFF_CENTRE = frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE),
+                              (KickoffLane.OFF_CENTRE, KickoffLane.BACK), (KickoffLane.BACK, KickoffLane.OFF_CENTRE)})
 #: layouts (lanes of the two cars nearest the ball) where, by team size, only the nearest car takes the kickoff and
 #: the other stays back, searched with the offsets above: in 2v2 a diagonal spot with the back spot's car (the back
 #: car covers as last man), in 3v3 and 4v4 when both come from the off-centre spots (the other waits as second man).
 #: The lanes are read each decision, and the car staying back drives into the back lane.
 KICKOFF_ALONE: dict[int, frozenset[tuple[KickoffLane, KickoffLane]]] = {
-    2: frozenset({(KickoffLane.DIAGONAL, KickoffLane.BACK)}),
-    3: frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE)}),
-    4: frozenset({(KickoffLane.OFF_CENTRE, KickoffLane.OFF_CENTRE)})}
+    2: frozenset({(KickoffLane.DIAGONAL, KickoffLane.BACK)}), 3: _BOTH_OFF_CENTRE, 4: _BOTH_OFF_CENTRE}
 
 
 @dataclass(frozen=True)

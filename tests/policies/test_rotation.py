@@ -308,6 +308,13 @@ def test_a_3v3_team_has_its_own_kickoff_offsets(first, second, aside_uu):
     np.testing.assert_allclose(rotation.kickoff_aim(view, "blue_1"), view.ball_pos + [aside_uu, 0.0, 0.0])
 
 
+def test_a_4v4_team_keeps_its_own_kickoff_offset():
+    """4v4 lost most of its kickoff goals with 3v3's offset for a diagonal and an off-centre taker (README)."""
+    view = _view({"blue_0": (2048.0, -2560.0), "blue_1": (256.0, -3840.0), "blue_2": (-256.0, -3840.0),
+                  "blue_3": (0.0, -4608.0)}, ball=(0.0, 0.0), ball_vel=(0.0, 0.0))
+    np.testing.assert_allclose(rotation.kickoff_aim(view, "blue_1"), view.ball_pos + [-120.0, 0.0, 0.0])
+
+
 def test_kickoff_lanes_of_the_five_spots():
     lanes = [rotation.kickoff_lane(np.array([x, y, 17.0])) for x, y, _ in C.KICKOFF_SPOTS_BLUE]
     assert lanes == [rotation.KickoffLane.DIAGONAL] * 2 + [rotation.KickoffLane.OFF_CENTRE] * 2 + [rotation.KickoffLane.BACK]
@@ -369,6 +376,6 @@ def test_the_rotators_kickoff_scores_where_aiming_at_the_ball_does_not(team_size
     alone in both); 3v3 (120 kickoffs, the presser playing from the first touch on) 13 - 2, at the centre 7 - 16.
     (Over all 8 phases, 2v2's 320 kickoffs: 61 - 3; 3v3's 960: 92 - 42. README "Kickoffs searched at a match's
     weights".)"""
-    tuned, centre = _kickoff_goals(team_size, [rotation.KICKOFF_SECOND_AIM_UU, {2: {}, 3: {}}], horizon_s=12.0)
+    tuned, centre = _kickoff_goals(team_size, [rotation.KICKOFF_SECOND_AIM_UU, {2: {}, 3: {}, 4: {}}], horizon_s=12.0)
     assert tuned[0] >= at_least and tuned[1] <= at_most_against, tuned
     assert tuned[0] - tuned[1] >= centre[0] - centre[1] + margin, (tuned, centre)
