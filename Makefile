@@ -5,7 +5,7 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-fast bench venv clean web-deps browser wheel benchmarl-venv
+.PHONY: demo test test-fast docs bench venv clean web-deps browser wheel benchmarl-venv
 
 venv: $(STAMP)
 
@@ -13,8 +13,8 @@ $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e '.[train,test,web,cluster,rlgym]'
-	$(PY) -m pip install --quiet --no-deps rlgym-rocket-league==2.0.1  # its numpy<2 pin is stale (README, For RLGym users)
+	$(PY) -m pip install --quiet -e '.[train,test,web,cluster,rlgym,docs]'
+	$(PY) -m pip install --quiet --no-deps rlgym-rocket-league==2.0.1  # its numpy<2 pin is stale (docs/guides/rlgym.md)
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -33,7 +33,7 @@ $(NODE_STAMP): package.json package-lock.json
 wheel: $(STAMP) $(NODE_STAMP)
 	$(PY) -m pip wheel --no-deps -w dist .
 
-# BenchMARL (README, For BenchMARL users) in a venv of its own: the [benchmarl] extra's torchrl <0.12 and the [train]
+# BenchMARL (docs/guides/benchmarl.md) in a venv of its own: the [benchmarl] extra's torchrl <0.12 and the [train]
 # extra's torchrl 0.14 cannot share one. One pip command with torch named in it, so torchvision (a BenchMARL
 # dependency) cannot pull a CUDA torch.
 BENCHMARL_VENV := .venv-benchmarl
@@ -69,8 +69,12 @@ define suite
 	test $$rest -eq 0 && test $$clock -eq 0
 endef
 
-# The whole suite, slow-marked tests included: correctness is never skipped.
-test: $(STAMP) $(NODE_STAMP) browser $(BENCHMARL_STAMP)
+# The documentation site, built strict (a broken link, snippet or API reference fails it) into runs/site.
+docs: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --site-dir runs/site
+
+# The whole suite, slow-marked tests included: correctness is never skipped. The docs build is part of it.
+test: $(STAMP) $(NODE_STAMP) browser $(BENCHMARL_STAMP) docs
 	$(call suite,)
 
 # Everything but the tests marked slow, for quick local iteration.
