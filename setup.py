@@ -1,7 +1,7 @@
 """The wheel's build step (everything else is in pyproject.toml).
 
 A wheel carries what a clone has beside the package, so that installed anywhere it works the same:
-- the top-level configs and the README's checkpoints (``rocketdrl_ma.config.SHIPPED_FOLDERS``) as
+- the top-level configs and the shipped checkpoints (``rocketdrl_ma.config.SHIPPED_FOLDERS``) as
   ``rocketdrl_ma/data/<folder>/...``, which ``rocketdrl_ma.config.resolve_shipped_path`` falls back to;
 - the npm packages the web page imports, exactly the files the page server serves and their licences, as
   ``rocketdrl_ma/web/vendor/`` in ``node_modules``' layout, from the ``node_modules`` that ``npm ci`` installs from

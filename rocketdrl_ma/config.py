@@ -23,7 +23,7 @@ from rocketdrl_ma.validation import reject_unknown
 PACKAGE_DIR = Path(__file__).resolve().parent
 REPO_ROOT = PACKAGE_DIR.parent
 #: The top-level folders that ship with the package: game, server, training and league configs, and the trained
-#: checkpoints the README uses (``policies/checkpoints``).
+#: checkpoints the docs use (``policies/checkpoints``).
 SHIPPED_FOLDERS = ("matches", "minigames", "server", "policies", "leagues")
 #: Where a wheel carries them (``setup.py`` copies them there at build time).
 WHEEL_DATA_DIR = PACKAGE_DIR / "data"

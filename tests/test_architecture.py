@@ -1,7 +1,7 @@
 """The package's shape: dependencies point one way, no import circles, no private names across packages.
 
 Every import counts, also those inside functions (lazy imports keep ``--help`` fast; they do not make a circle
-acceptable). The layers, lowest first, are the README's architecture: physics moves bodies, rules decide what
+acceptable). The layers, lowest first, are docs/guides/architecture.md's: physics moves bodies, rules decide what
 counts, env speaks PettingZoo, policies learn and play, integrations hand the env to other trainers (BenchMARL),
 server speaks Zenoh, web and league sit on the server, the command line on everything.
 """

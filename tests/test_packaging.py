@@ -122,7 +122,7 @@ assert 'venv' in Path(rocketdrl_ma.__file__).parts, rocketdrl_ma.__file__
 env = rocketdrl_ma.parallel_env("minigames/penalty.yaml")
 parallel_api_test(env, num_cycles=200)
 assert 'data' in resolve_config_path("minigames/penalty.yaml").parts
-policy = load_policy("checkpoint:policies/checkpoints/penalty_tuned.pt")   # the README's checkpoint
+policy = load_policy("checkpoint:policies/checkpoints/penalty_tuned.pt")   # a shipped checkpoint
 env = rocketdrl_ma.parallel_env("minigames/penalty.yaml")
 env.reset(seed=0)
 policy.reset(env.game_state)

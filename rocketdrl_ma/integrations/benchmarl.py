@@ -31,7 +31,7 @@ each with its own policy, critic, loss and optimiser, against the other's curren
 snapshot pool; the returns of the two teams are zero-sum under the default goal reward). To train one team against
 a fixed opponent, name it in ``opponent``: the orange cars are then driven inside the env (``FixedTeamEnv``) and
 BenchMARL sees only the group ``blue``. Opponent pools, PFSP and ratings are this package's own trainer
-(``rocketdrl-ma train``, README *Self-play and leagues*).
+(``rocketdrl-ma train``, docs/guides/selfplay-leagues.md).
 
 BenchMARL 1.5.2 needs ``torchrl>=0.10,<0.12``, older than this package's ``[train]`` extra (torchrl 0.14): the
 ``[benchmarl]`` extra lives in its own environment (``make benchmarl-venv``). Importing this module needs neither;

@@ -19,7 +19,7 @@ ARENA_EXTENT_X = 4096.0
 ARENA_EXTENT_Y = 5120.0
 ARENA_HEIGHT = 2048.0
 ARENA_CORNER_SUM = 8064.0  # 45 degree corner planes: |x| + |y| = 8064
-ARENA_FILLET_RADIUS = 400.0  # floor-to-wall and wall-to-ceiling ramps (see the README: the wiki says ~256)
+ARENA_FILLET_RADIUS = 400.0  # floor-to-wall and wall-to-ceiling ramps (docs/guides/fidelity.md: the wiki says ~256)
 GOAL_HALF_WIDTH = 892.755
 GOAL_HEIGHT = 642.775
 GOAL_DEPTH = 880.0

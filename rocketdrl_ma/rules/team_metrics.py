@@ -1,7 +1,7 @@
 """Team metrics of a match, built from the physics' typed events (``BallTouch``, ``Demo``, ``BoostPickup``) and the
 cars' positions: how a team played together, for match summaries, league reports and training logs.
 
-Definitions (also in the README, "Team metrics"):
+Definitions (also in docs/guides/team-play.md, "Team metrics"):
 
 - **touch**: the first tick of a car's contact with the ball (a dribble is one touch).
 - **pass**: a touch by car B after one by its team-mate A, with no touch by anyone in between, at least

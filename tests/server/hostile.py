@@ -29,7 +29,7 @@ import zenoh
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 
 V = 2
-SIGNED_TAG = b"rocketdrl-ma/2 signed\x00"  # signed as the README says, only with the hostile's own key
+SIGNED_TAG = b"rocketdrl-ma/2 signed\x00"  # signed as the wire protocol says, only with the hostile's own key
 
 
 def pack(message: dict) -> bytes:

@@ -1,4 +1,4 @@
-"""A bot written from the README's "Wire protocol" section alone: plain Python with msgpack, zenoh and
+"""A bot written from the wire protocol page (docs/guides/wire-protocol.md) alone: plain Python with msgpack, zenoh and
 cryptography, no import of rocketdrl_ma. It joins a match, checks every message the server signs, and
 drives its car at the ball with the continuous action format until the match ends.
 

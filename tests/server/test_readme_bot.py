@@ -1,6 +1,6 @@
-"""The README's wire protocol is enough to write a bot: ``readme_bot.py`` (msgpack, zenoh and cryptography
-only; no import of rocketdrl_ma) joins with a ticket, plays a full lockstep match against an SDK bot, and
-its actions drive its car."""
+"""The wire protocol page (docs/guides/wire-protocol.md) is enough to write a bot: ``readme_bot.py`` (msgpack,
+zenoh and cryptography only; no import of rocketdrl_ma) joins with a ticket, plays a full lockstep match against an
+SDK bot, and its actions drive its car."""
 from __future__ import annotations
 
 import sys

@@ -1,4 +1,4 @@
-"""The two-machine recipe, on loopback, every part its own process as the README runs it:
+"""The two-machine recipe, on loopback, every part its own process as docs/guides/server.md runs it:
 ``rocketdrl-ma keys`` (key, admin secret, passwords, TLS CA and certificate, one client file per user),
 ``rocketdrl-ma router`` (TLS for the bots, user/password authentication, access control generated from the
 server's YAML), a match server that is the router's client and listens on nothing, and bots and the lobby
