@@ -6,9 +6,9 @@ The sign is ``arena_sdf``'s at a point of the game's surface: positive where tha
 (the game's surface stands in front of ours), negative where it lies in our solid (ours stands in front).
 
 Only the part of the game's surface that bounds its playable space is sampled: mesh points beyond a plane (the
-meshes run a few uu under the floor and past the side walls) are dropped, and so are plane points that a mesh
-hides (the floor under a fillet): a point counts if the segment from it to the arena's centre leaves through no
-mesh triangle's back. Shared by tests/physics/test_mesh_file.py and ``benchmarks/fidelity.py``.
+meshes run a few uu under the floor and past the side walls) are dropped, and so are points that a mesh hides
+(the floor under a fillet, the end of a corner mesh behind the back wall's): a point counts if the segment from it
+to the arena's centre (to the goal's centre, for a point in a goal) meets no mesh triangle from behind first. Shared by tests/physics/test_mesh_file.py and ``benchmarks/fidelity.py``.
 """
 from __future__ import annotations
 
@@ -23,7 +23,9 @@ from rocketdrl_ma.physics.constants import ARENA_EXTENT_X, ARENA_HEIGHT
 from rocketdrl_ma.physics.mesh_file import read_soccar_arena
 
 GOAL_BACK_Y = 6000.0  # the back of the game's net; every mesh vertex has |y| <= 6000
-ARENA_CENTRE = np.array([0.0, 0.0, 0.5 * ARENA_HEIGHT])
+ARENA_CENTRE = (0.0, 0.0, 0.5 * ARENA_HEIGHT)
+GOAL_CENTRE = (0.0, 5560.0, 320.0)  # mirrored for the blue goal; sees the whole inside of the net
+GOAL_BOX = (892.755, 5120.0, 642.775)  # |x| <=, |y| >=, z <=: a point in a goal
 OUR_FILLET_TOP_Z = 400.0  # the top of our floor-to-wall ramp: the issue's "below / above the fillet"
 # (origin, unit normal into the arena, edge u, edge v) of RocketSim's four planes, cut to the arena's bounding box
 PLANES = (
@@ -102,12 +104,13 @@ def _sample_triangles(a: np.ndarray, b: np.ndarray, c: np.ndarray, n: int, rng: 
 
 
 @njit(cache=True)
-def _leaves_through_a_back(points, target, a, e1, e2, normal, lo, hi):
-    """Per point: whether the first mesh triangle on the segment point -> target is met from behind (normal along
-    the segment): the point lies outside the game's playable space."""
+def _leaves_through_a_back(points, targets, a, e1, e2, normal, lo, hi):
+    """Per point: whether the first mesh triangle on the segment point -> its target is met from behind (normal
+    along the segment): the point lies outside the game's playable space."""
     out = np.zeros(points.shape[0], dtype=np.bool_)
     for i in range(points.shape[0]):
         o = points[i]
+        target = targets[i]
         d = target - o
         seg_lo = np.minimum(o, target)
         seg_hi = np.maximum(o, target)
@@ -143,31 +146,57 @@ def _leaves_through_a_back(points, target, a, e1, e2, normal, lo, hi):
     return out
 
 
+def _view_targets(points: np.ndarray) -> np.ndarray:
+    """Where each point is seen from: the goal's centre for a point in a goal, else the arena's centre."""
+    in_goal = ((np.abs(points[:, 0]) <= GOAL_BOX[0]) & (np.abs(points[:, 1]) >= GOAL_BOX[1])
+               & (points[:, 2] <= GOAL_BOX[2]))
+    targets = np.tile(np.array(ARENA_CENTRE), (len(points), 1))
+    targets[in_goal] = GOAL_CENTRE
+    targets[in_goal, 1] *= np.sign(points[in_goal, 1])
+    return targets
+
+
+class _Mesh:
+    """The game's meshes as triangle arrays, with what the visibility test needs."""
+
+    def __init__(self, mesh_folder: str | Path):
+        vertices, triangles, _ = read_soccar_arena(mesh_folder)
+        v = vertices.astype(np.float64)
+        self.a, self.b, self.c = v[triangles[:, 0]], v[triangles[:, 1]], v[triangles[:, 2]]
+        cross = np.cross(self.b - self.a, self.c - self.a)
+        self.area = 0.5 * float(np.linalg.norm(cross, axis=1).sum())
+        self.normal = cross / np.linalg.norm(cross, axis=1)[:, None]  # RocketSim's meshes wind towards the arena
+        self.lo = np.minimum(np.minimum(self.a, self.b), self.c)
+        self.hi = np.maximum(np.maximum(self.a, self.b), self.c)
+
+    def visible(self, points: np.ndarray) -> np.ndarray:
+        """Which points bound the game's playable space: inside RocketSim's planes and hidden by no mesh."""
+        inside = (points[:, 2] >= 0.0) & (points[:, 2] <= ARENA_HEIGHT) & (np.abs(points[:, 0]) <= ARENA_EXTENT_X)
+        hidden = _leaves_through_a_back(points, _view_targets(points), self.a, self.b - self.a, self.c - self.a,
+                                        self.normal, self.lo, self.hi)
+        return inside & ~hidden
+
+
 def sample_game_surface(mesh_folder: str | Path, n_mesh_points: int, seed: int) -> SurfaceSample:
-    """``n_mesh_points`` points on the meshes and as many per uu^2 on the planes, uniform by area, seeded; only
-    points on the boundary of the game's playable space (see the module docstring)."""
+    """``n_mesh_points`` points on the meshes and as many per uu^2 on the planes (before the hidden ones are
+    dropped), uniform by area, seeded; only points on the boundary of the game's playable space (see the module
+    docstring)."""
     if n_mesh_points < 1:
         raise ValueError(f"n_mesh_points must be >= 1, got {n_mesh_points}")
     rng = np.random.default_rng(seed)
-    vertices, triangles, _ = read_soccar_arena(mesh_folder)
-    v = vertices.astype(np.float64)
-    a, b, c = v[triangles[:, 0]], v[triangles[:, 1]], v[triangles[:, 2]]
-    cross = np.cross(b - a, c - a)
-    mesh_area = 0.5 * float(np.linalg.norm(cross, axis=1).sum())
-    tri_normal = cross / np.linalg.norm(cross, axis=1)[:, None]  # RocketSim's meshes wind towards the arena
-
+    mesh = _Mesh(mesh_folder)
     mesh_points, mesh_normals = [], []
     kept = 0
-    while kept < n_mesh_points:  # the points behind a plane are dropped: draw until enough are left
-        p, tri = _sample_triangles(a, b, c, n_mesh_points, rng)
-        keep = (p[:, 2] >= 0.0) & (p[:, 2] <= ARENA_HEIGHT) & (np.abs(p[:, 0]) <= ARENA_EXTENT_X)
+    while kept < n_mesh_points:  # hidden points are dropped: draw until enough are left
+        p, tri = _sample_triangles(mesh.a, mesh.b, mesh.c, n_mesh_points, rng)
+        keep = mesh.visible(p)
         mesh_points.append(p[keep])
-        mesh_normals.append(tri_normal[tri[keep]])
+        mesh_normals.append(mesh.normal[tri[keep]])
         kept += int(keep.sum())
     mesh_points = np.concatenate(mesh_points)[:n_mesh_points]
     mesh_normals = np.concatenate(mesh_normals)[:n_mesh_points]
 
-    density = n_mesh_points / mesh_area
+    density = n_mesh_points / mesh.area
     plane_points, plane_normals = [], []
     for origin, normal, edge_u, edge_v in PLANES:
         area = float(np.linalg.norm(np.cross(edge_u, edge_v)))
@@ -176,9 +205,8 @@ def sample_game_surface(mesh_folder: str | Path, n_mesh_points: int, seed: int) 
         plane_points.append(np.asarray(origin) + uv[:, :1] * np.asarray(edge_u) + uv[:, 1:] * np.asarray(edge_v))
         plane_normals.append(np.tile(normal, (n, 1)))
     plane_points, plane_normals = np.concatenate(plane_points), np.concatenate(plane_normals)
-    hidden = _leaves_through_a_back(plane_points, ARENA_CENTRE, a, b - a, c - a, tri_normal,
-                                    np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c))
-    plane_points, plane_normals = plane_points[~hidden], plane_normals[~hidden]
+    keep = mesh.visible(plane_points)
+    plane_points, plane_normals = plane_points[keep], plane_normals[keep]
 
     points = np.concatenate([mesh_points, plane_points])
     normals = np.concatenate([mesh_normals, plane_normals])

@@ -158,8 +158,8 @@ def test_distance_table_reports_every_family_and_the_worst(table):
 
 
 def test_floor_and_walls_above_the_fillets_agree_today(table):
-    """The floor away from the walls and goals, the side walls between the fillets and the back walls above 400 uu
-    are where our arena already matches the game's."""
+    """The floor away from the walls and goals, and the side and back walls between the fillets away from the
+    corners and the goal frame, are where our arena already matches the game's (to float precision)."""
     sample, signed, rows = table
     x, y, z = np.abs(sample.points[:, 0]), np.abs(sample.points[:, 1]), sample.points[:, 2]
     floor = sample.family == FAMILIES.index("floor")
@@ -169,4 +169,4 @@ def test_floor_and_walls_above_the_fillets_agree_today(table):
     side_wall = (x > C.ARENA_EXTENT_X - 1.0) & (y < 3000.0) & (z > 400.0) & (z < 1500.0)
     assert side_wall.sum() > 500 and np.abs(signed[side_wall]).max() < 0.01
     back_wall = (x > 1300.0) & (x < 2300.0) & (y > 5000.0) & (z > 400.0) & (z < 1400.0)
-    assert back_wall.sum() > 200 and np.abs(signed[back_wall]).max() < 6.0
+    assert back_wall.sum() > 200 and np.abs(signed[back_wall]).max() < 0.01
