@@ -8,7 +8,9 @@ The sign is ``arena_sdf``'s at a point of the game's surface: positive where tha
 Only the part of the game's surface that bounds its playable space is sampled: mesh points beyond a plane (the
 meshes run a few uu under the floor and past the side walls) are dropped, and so are points that a mesh hides
 (the floor under a fillet, the end of a corner mesh behind the back wall's): a point counts if the segment from it
-to the arena's centre (to the goal's centre, for a point in a goal) meets no mesh triangle from behind first. Shared by tests/physics/test_mesh_file.py and ``benchmarks/fidelity.py``.
+to the arena's centre (to the goal's centre, for a point in a goal) meets no mesh triangle from behind first.
+
+Shared by tests/physics/test_mesh_file.py and ``benchmarks/fidelity.py``.
 """
 from __future__ import annotations
 
@@ -25,11 +27,12 @@ from rocketdrl_ma.physics.mesh_file import read_soccar_arena
 GOAL_BACK_Y = 6000.0  # the back of the game's net; every mesh vertex has |y| <= 6000
 ARENA_CENTRE = (0.0, 0.0, 0.5 * ARENA_HEIGHT)
 GOAL_CENTRE = (0.0, 5560.0, 320.0)  # mirrored for the blue goal; sees the whole inside of the net
-GOAL_BOX = (892.755, 5120.0, 642.775)  # |x| <=, |y| >=, z <=: a point in a goal
-OUR_FILLET_TOP_Z = 400.0  # the top of our floor-to-wall ramp: the issue's "below / above the fillet"
+GOAL_BOX = (896.0, 5120.0, 640.0)  # |x| <=, |y| >=, z <=: a point in the game's goal (arena_mesh_profile.py)
+OUR_FILLET_TOP_Z = 400.0  # issue 49 splits the walls at the top of our (pre-refit) 400 uu floor-to-wall ramp
 # (origin, unit normal into the arena, edge u, edge v) of RocketSim's four planes, cut to the arena's bounding box
 PLANES = (
-    ((-ARENA_EXTENT_X, -GOAL_BACK_Y, 0.0), (0.0, 0.0, 1.0), (2 * ARENA_EXTENT_X, 0.0, 0.0), (0.0, 2 * GOAL_BACK_Y, 0.0)),
+    ((-ARENA_EXTENT_X, -GOAL_BACK_Y, 0.0), (0.0, 0.0, 1.0), (2 * ARENA_EXTENT_X, 0.0, 0.0),
+     (0.0, 2 * GOAL_BACK_Y, 0.0)),
     ((-ARENA_EXTENT_X, -GOAL_BACK_Y, ARENA_HEIGHT), (0.0, 0.0, -1.0), (2 * ARENA_EXTENT_X, 0.0, 0.0),
      (0.0, 2 * GOAL_BACK_Y, 0.0)),
     ((-ARENA_EXTENT_X, -GOAL_BACK_Y, 0.0), (1.0, 0.0, 0.0), (0.0, 2 * GOAL_BACK_Y, 0.0), (0.0, 0.0, ARENA_HEIGHT)),

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from arena_mesh_distance import FAMILIES, distance_table, format_table, sample_game_surface
+from arena_mesh_profile import fit_circle, measure_game_arena
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.physics.arena_geometry import arena_sdf_many
 from rocketdrl_ma.physics.mesh_file import (BT_TO_UU, find_soccar_meshes, installed_rlgym_mesh_folder, read_cmf,
@@ -170,3 +171,26 @@ def test_floor_and_walls_above_the_fillets_agree_today(table):
     assert side_wall.sum() > 500 and np.abs(signed[side_wall]).max() < 0.01
     back_wall = (x > 1300.0) & (x < 2300.0) & (y > 5000.0) & (z > 400.0) & (z < 1400.0)
     assert back_wall.sum() > 200 and np.abs(signed[back_wall]).max() < 0.01
+
+
+# ================================================================= the game's dimensions
+def test_fit_circle_finds_a_circle_and_needs_three_points():
+    angles = np.linspace(0.1, 1.4, 7)
+    u, v, radius, residual = fit_circle(np.column_stack([3.0 + 256.0 * np.cos(angles), -2.0 + 256.0 * np.sin(angles)]))
+    assert (u, v, radius) == pytest.approx((3.0, -2.0, 256.0), abs=1e-6) and residual < 1e-6
+    with pytest.raises(ValueError, match="points_2d"):
+        fit_circle(np.zeros((2, 2)))
+
+
+def test_the_game_arena_measures_as_the_game(mesh_folder):
+    """The measuring tool on the meshes: the fillet radii, corner roundings and goal size of Rocket League's soccar
+    arena (256 / 512 uu side and corner fillets, 160 at the back walls, a 896 x 640 goal 880 deep)."""
+    game = {m.name: m for m in measure_game_arena(mesh_folder)}
+    expected = {"side wall to floor fillet": 256.0, "corner wall to floor fillet": 256.0,
+                "back wall to floor fillet": 160.0, "side wall to ceiling fillet": 512.0,
+                "back wall to ceiling fillet": 512.0, "corner wall to ceiling fillet": 512.0,
+                "goal half width (net side wall)": 896.0, "goal height (roof behind the crossbar)": 640.0,
+                "back of the net": C.ARENA_EXTENT_Y + C.GOAL_DEPTH}
+    for name, value in expected.items():
+        assert game[name].game == pytest.approx(value, abs=3.0), name
+        assert game[name].fit_residual < 2.0, name
