@@ -46,7 +46,7 @@ GOAL_REGION_X = 1300.0  # the goal frame and the ramps beside the posts
 GOAL_REGION_Z = 900.0
 GOAL_FRAME_Y = 4700.0  # |y| from which the back wall curves round the posts and the crossbar
 GOAL_INTERIOR_Y = 5200.0  # |y| past the frame's rounding: the net's floor, sides, roof and back
-CORNER_X, CORNER_Y = 2800.0, 3800.0  # the 45 degree corner walls span x 2944..4096, y 3968..5120
+CORNER_X, CORNER_Y = 2550.0, 3550.0  # the corner walls with the game's ~860 uu roundings into the side and back walls
 
 
 @dataclass(frozen=True)
