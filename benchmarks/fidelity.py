@@ -4,9 +4,12 @@ Prints a markdown table: quantity | reference | RocketSim | ours | error % (ours
 scenarios (distance between final positions as a percentage of the RocketSim path length; the test allows 10 %), then
 the contact grids of tests/physics/contact_scenes.py (every scene at 8 sub-tick phases), worst case per family group:
 car-ball (ball speed and direction 12 ticks after the first touch), floor bounces (rebound ratio), car-car (outcome,
-speeds 6 ticks after the hit).
+speeds 6 ticks after the hit), then the signed distance from our analytic arena to the game's collision meshes
+(tests/physics/arena_mesh_distance.py) per surface family and the game's fillet radii and goal dimensions next to ours
+(tests/physics/arena_mesh_profile.py), if rlgym-rocket-league's meshes are installed.
 
-Run from the repo root: ``python benchmarks/fidelity.py`` (``--rocketsim-only`` skips our engine).
+Run from the repo root: ``python benchmarks/fidelity.py`` (``--rocketsim-only`` skips our engine,
+``--arena-mesh-only`` prints the two arena-mesh tables alone).
 The scenario and adapter code lives in tests/physics/ (fidelity_scenarios.py, rocketsim_oracle.py) and is shared with
 tests/physics/test_fidelity.py.
 """
@@ -93,10 +96,39 @@ def print_contact_grids() -> None:
               f"5 %, same outcome |")
 
 
+def print_arena_mesh_tables(n_mesh_points: int, seed: int) -> None:
+    from arena_mesh_distance import distance_table, format_table, sample_game_surface
+    from arena_mesh_profile import format_measurements, measure_game_arena
+    from rocketdrl_ma.physics.mesh_file import installed_rlgym_mesh_folder
+    folder = installed_rlgym_mesh_folder()
+    if folder is None:
+        print("Arena vs the game's meshes: skipped, rlgym-rocket-league's collision meshes are not installed "
+              "(pip install --no-deps rlgym-rocket-league==2.0.1).")
+        return
+    sample = sample_game_surface(folder, n_mesh_points, seed)
+    print(f"Signed distance (uu) from our arena to the game's ({n_mesh_points} points on RocketSim's soccar meshes "
+          f"and {int((~sample.from_mesh).sum())} on its planes, uniform by area, seed {seed}; + where the game's "
+          f"surface lies in our playable space):")
+    print()
+    print(format_table(distance_table(sample)))
+    print()
+    print("The game's arena measured on the meshes (circle fits to cross-sections) and ours:")
+    print()
+    print(format_measurements(measure_game_arena(folder)))
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rocketsim-only", action="store_true", help="do not run our engine")
+    ap.add_argument("--arena-mesh-only", action="store_true", help="print only the arena-mesh tables")
+    ap.add_argument("--mesh-points", type=int, default=100_000, help="points sampled on the game's meshes")
+    ap.add_argument("--mesh-seed", type=int, default=0)
     args = ap.parse_args(argv)
+    if args.mesh_points < 1:
+        ap.error(f"--mesh-points must be >= 1, got {args.mesh_points}")
+    if args.arena_mesh_only:
+        print_arena_mesh_tables(args.mesh_points, args.mesh_seed)
+        return 0
 
     init_rocketsim(tempfile.mkdtemp(prefix="rocketsim_dummy_meshes_"))
     ours_ok, ours_err = not args.rocketsim_only, None
@@ -145,6 +177,8 @@ def main(argv=None) -> int:
     if ours_ok:
         print()
         print_contact_grids()
+        print()
+        print_arena_mesh_tables(args.mesh_points, args.mesh_seed)
 
     print()
     if ours_err:

@@ -1,0 +1,42 @@
+"""Our arena against RocketSim on the game's collision meshes (``rocketsim_mesh_oracle``), where the planes-only
+oracle of the other fidelity tests cannot look: the walls below the fillets' tops."""
+import numpy as np
+import pytest
+
+from rocketdrl_ma import physics
+from rocketsim_mesh_oracle import TICK_RATE, BallScene, ball_trajectories_on_meshes, mesh_folder_or_none
+
+SPEED_TOLERANCE = 0.05  # issue 49's target: outgoing speed within 5 % and direction within 2 degrees
+ANGLE_TOLERANCE_DEG = 2.0
+
+
+def _ours(scene: BallScene) -> np.ndarray:
+    arena = physics.Arena(tick_rate=TICK_RATE)
+    try:
+        arena.set_mutator_config(physics.MutatorConfig(gravity_z_uu_s2=scene.gravity_z))
+        arena.ball.set_state(physics.BallState(pos=np.array(scene.pos), vel=np.array(scene.vel),
+                                               ang_vel=np.array(scene.ang_vel)))
+        arena.step(scene.ticks)
+        return np.array(arena.ball.get_state().vel, dtype=np.float64)
+    finally:
+        arena.close()
+
+
+@pytest.mark.xfail(strict=True, reason="our 400 uu fillet vs the game's ~256 uu: issue 49")
+def test_zero_g_ball_off_the_back_wall_below_the_fillet_top():
+    """1,500 uu/s straight into the back wall at z = 200, beside the goal: the game's wall is flat there (its ramp
+    ends at 256 uu), so the ball comes straight back; ours meets our ramp and is sent up."""
+    pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
+    folder = mesh_folder_or_none()
+    if folder is None:
+        pytest.skip("rlgym-rocket-league's collision meshes are not installed")
+    scene = BallScene(pos=(1500.0, 4500.0, 200.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE, gravity_z=0.0)
+    (theirs,) = ball_trajectories_on_meshes([scene], folder)
+    game, ours = theirs.vel[-1], _ours(scene)
+    print(f"outgoing velocity after 1 s: RocketSim on the meshes {np.round(game, 1)}, ours {np.round(ours, 1)}")
+    cos = float(np.dot(game, ours) / (np.linalg.norm(game) * np.linalg.norm(ours)))
+    angle = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    speed_error = abs(np.linalg.norm(ours) / np.linalg.norm(game) - 1.0)
+    assert speed_error < SPEED_TOLERANCE and angle < ANGLE_TOLERANCE_DEG, (
+        f"RocketSim {np.round(game, 1)} vs ours {np.round(ours, 1)}: speed off {100 * speed_error:.1f} %, "
+        f"direction off {angle:.1f} deg")
