@@ -5,6 +5,13 @@
 """
 from __future__ import annotations
 
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("rocketdrl-ma")  # the installed distribution's: pyproject.toml's, as the wheel reports it
+except PackageNotFoundError:  # a source tree on sys.path that was never installed
+    __version__ = "0+unknown"
+
 # Import the subpackage before defining ``env()``: a later first import of ``rocketdrl_ma.env`` would
 # otherwise rebind the package attribute ``env`` from the function to the subpackage.
 import rocketdrl_ma.env as _env_package  # noqa: F401
