@@ -5,11 +5,11 @@
 """
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
+from importlib import metadata as _metadata
 
 try:
-    __version__ = version("rocketdrl-ma")  # the installed distribution's: pyproject.toml's, as the wheel reports it
-except PackageNotFoundError:  # a source tree on sys.path that was never installed
+    __version__ = _metadata.version("rocketdrl-ma")  # pyproject.toml's, as installed (the wheel reports the same)
+except _metadata.PackageNotFoundError:  # a source tree on sys.path that was never installed
     __version__ = "0+unknown"
 
 # Import the subpackage before defining ``env()``: a later first import of ``rocketdrl_ma.env`` would
