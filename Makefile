@@ -17,8 +17,12 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet --no-deps rlgym-rocket-league==2.0.1  # its numpy<2 pin is stale (docs/guides/rlgym.md)
 	touch $(STAMP)
 
+# The physics kernels compiled once (numba's cache), then the shipped 2v2 team against two scripted rotators on a
+# 3-minute clock (overtime capped at 30 s), with the score live; its replay opens in `rocketdrl-ma web`.
 demo: $(STAMP)
-	$(PY) -m rocketdrl_ma.cli play matches/1v1.yaml --blue ball_chaser --orange goalie --clock 60
+	$(PY) -m rocketdrl_ma.cli warmup
+	$(PY) -m rocketdrl_ma.cli play matches/2v2.yaml --blue checkpoint:policies/checkpoints/selfplay_2v2_from_1v1.pt \
+		--orange rotator --clock 180 --set overtime_limit_s=30 --replay runs/demo/2v2.npz
 
 # The page of `rocketdrl-ma web`: three.js and msgpack from the npm registry, exactly as package-lock.json says.
 NODE_STAMP := node_modules/.installed

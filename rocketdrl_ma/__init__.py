@@ -5,6 +5,13 @@
 """
 from __future__ import annotations
 
+from importlib import metadata as _metadata
+
+try:
+    __version__ = _metadata.version("rocketdrl-ma")  # pyproject.toml's, as installed (the wheel reports the same)
+except _metadata.PackageNotFoundError:  # a source tree on sys.path that was never installed
+    __version__ = "0+unknown"
+
 # Import the subpackage before defining ``env()``: a later first import of ``rocketdrl_ma.env`` would
 # otherwise rebind the package attribute ``env`` from the function to the subpackage.
 import rocketdrl_ma.env as _env_package  # noqa: F401

@@ -6,6 +6,7 @@ The fresh venv borrows the dependencies (torch, pybullet, zenoh, ...) from the v
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -101,6 +102,8 @@ def installed(tmp_path_factory) -> tuple[Path, Path, dict]:
 @pytest.mark.slow
 def test_the_wheel_carries_its_configs_and_checkpoints(installed):
     bin_dir, elsewhere, env = installed
+    [project_version] = re.findall(r'^version = "(.+)"$', (REPO / "pyproject.toml").read_text(), re.MULTILINE)
+    assert run([str(bin_dir / "rocketdrl-ma"), "--version"], elsewhere, env) == f"rocketdrl-ma {project_version}\n"
     listing = run([str(bin_dir / "rocketdrl-ma"), "configs"], elsewhere, env)
     root = Path(listing.split("(in ", 1)[1].split(")", 1)[0])
     assert root.parts[-2:] == ("rocketdrl_ma", "data") and REPO not in root.parents  # inside the venv

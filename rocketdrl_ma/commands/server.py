@@ -117,7 +117,8 @@ def _run_watch(args: argparse.Namespace) -> int:
     return 0
 
 
-def _parse_set(items: list[str] | None) -> dict:
+def parse_set(items: list[str] | None) -> dict:
+    """``--set KEY=VALUE`` items as config overrides (each value read as YAML); ``play`` takes them too."""
     import yaml
     overrides = {}
     for item in items or []:
@@ -154,7 +155,7 @@ def _run_lobby(args: argparse.Namespace) -> int:
                        if v is not None}
             if args.seat:
                 options["seats"] = _parse_seats(args.seat)
-            reply = lobby.create(args.target, args.id, overrides=_parse_set(args.set), **options)
+            reply = lobby.create(args.target, args.id, overrides=parse_set(args.set), **options)
             print(f"created match {reply['id']} ({reply['mode']}, slots {list(reply['slot_status'])})")
             for slot, ticket in reply["tickets"].items():
                 print(f"ticket {slot} {ticket}")

@@ -30,6 +30,7 @@ def _drop_stale_kernel_caches() -> None:
 
 _drop_stale_kernel_caches()
 
+from . import compile_notice  # noqa: F401  (before any kernel runs: the first compile of a process says so)
 from .arena import Arena, Ball, BoostPad, Car
 from .batch import ArenaBatch
 from .car_config import PRESETS, CarConfig, get_preset

@@ -13,8 +13,7 @@ CHECKPOINTS = Path(__file__).resolve().parents[2] / "policies" / "checkpoints"
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["penalty_tuned", "barrier_tuned", "barrier_seed_actions", "aerial_taught",
-                                  "aerial_tuned", "aerial_tuned_annealed_3.8M", "aerial_tuned_scratch_10M",
-                                  "aerial_explore_10M"])
+                                  "aerial_tuned", "aerial_explore_10M"])
 def test_a_shipped_minigame_checkpoint_scores(name):
     path = CHECKPOINTS / f"{name}.pt"
     _, meta = load_model(path)

@@ -173,8 +173,9 @@ class RaySensor(ObsBuilder):
             centers, axes, half = np.array(centers), np.array(axes), np.array(half)
         else:
             centers, axes, half = np.empty((0, 3)), np.empty((0, 3, 3)), np.empty((0, 3))
-        return ray_hits(np.ascontiguousarray(car.pos, dtype=np.float64), self.ray_directions(car.rot_mat),
-                        np.ascontiguousarray(state.ball.pos, dtype=np.float64), C.BALL_RADIUS, centers, axes, half,
+        # fresh writable copies: a read-only state array (a decoded server state) would compile another signature
+        return ray_hits(np.array(car.pos, dtype=np.float64), self.ray_directions(car.rot_mat),
+                        np.array(state.ball.pos, dtype=np.float64), C.BALL_RADIUS, centers, axes, half,
                         np.array(box_class, dtype=np.int64), self.reach_uu)
 
     def build(self, agent: str, state: GameState) -> np.ndarray:
