@@ -19,7 +19,7 @@ $(STAMP): pyproject.toml
 
 # The physics kernels compiled once (numba's cache), then the shipped 2v2 team against two scripted rotators on a
 # 3-minute clock (overtime capped at 30 s), with the score live; its replay opens in `rocketdrl-ma web`.
-demo: $(STAMP)
+demo: $(STAMP) $(NODE_STAMP)
 	$(PY) -m rocketdrl_ma.cli warmup
 	$(PY) -m rocketdrl_ma.cli play matches/2v2.yaml --blue checkpoint:policies/checkpoints/selfplay_2v2_from_1v1.pt \
 		--orange rotator --clock 180 --set overtime_limit_s=30 --replay runs/demo/2v2.npz

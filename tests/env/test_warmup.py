@@ -58,25 +58,27 @@ print(kernels_compiled())
 """
 
 
-def _run(argv: list[str]) -> subprocess.CompletedProcess:
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
+def _run(argv: list[str], cache_dir: Path) -> subprocess.CompletedProcess:
+    # a cache of its own: other test processes compiling beside it may rewrite a shared cache index meanwhile
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])),
+               NUMBA_CACHE_DIR=str(cache_dir))
     done = subprocess.run([sys.executable, *argv], cwd=REPO, env=env, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, f"{argv} exited {done.returncode}:\n{done.stdout}\n{done.stderr}"
     return done
 
 
-def test_after_warmup_a_fresh_process_compiles_no_kernel():
-    warm = _run(["-m", "rocketdrl_ma.cli", "warmup"])
+def test_after_warmup_a_fresh_process_compiles_no_kernel(tmp_path):
+    warm = _run(["-m", "rocketdrl_ma.cli", "warmup"], tmp_path)
     assert "physics kernels ready:" in warm.stdout
-    fresh = _run(["-c", FRESH_PROCESS])
+    fresh = _run(["-c", FRESH_PROCESS], tmp_path)
     _, kernels, _, misses, _, compiled = fresh.stdout.split()
     assert int(kernels) >= 5  # the entry kernels were found, so the count below means something
     assert (misses, compiled) == ("0", "0")
     assert compiling_line() not in fresh.stderr
 
 
-def test_the_first_compile_of_a_process_prints_the_line_once():
-    probe = _run(["-c", PROBE])
+def test_the_first_compile_of_a_process_prints_the_line_once(tmp_path):
+    probe = _run(["-c", PROBE], tmp_path)
     assert probe.stderr.count(compiling_line()) == 1
     assert "rocketdrl_ma.probe.plus_one(int64,)" in probe.stdout and "times_two" in probe.stdout
     assert "elsewhere" not in probe.stdout
