@@ -67,7 +67,8 @@ def team_metrics_lines(cfg: LeagueConfig, results: list[MatchResult]) -> list[st
     rows = entrant_team_metrics(cfg, results)
     lines = ["## Team metrics", "",
              "Per match of each entrant, over the stored matches (definitions: docs/guides/team-play.md, "
-             "\"Team metrics\"). Last back: the share of live play each of its cars (by slot) was the one nearest its own goal.", "",
+             "\"Team metrics\"). Last back: the share of live play each of its cars (by slot) was the one nearest "
+             "its own goal.", "",
              "| entrant | matches | goals for | goals against | " + " | ".join(h for _, h in PER_MATCH)
              + " | team-mate distance (uu) | last back by slot |",
              "|---|" + "---:|" * (4 + len(PER_MATCH)) + "---|"]
