@@ -1,0 +1,104 @@
+"""The tutorials under docs/tutorials/, run as their reader runs them: every ``sh`` block, in page order, in an empty
+folder (``tutorial_runner``), and the files the page has the reader save. Each test ends by checking that it ran
+every shell block of its page.
+
+Scale-downs (explicit, and each test fails if the page no longer has the text it replaces):
+- training: the page's ``--max-steps 716800`` (8-9 minutes on 2 cores) becomes one batch, ``--max-steps 2048``;
+- evaluation: ``--episodes 200`` becomes ``--episodes 4``.
+The match server and the page server listen on free ports instead of the defaults (7447, 8765), so a test never meets
+another server: ``--listen``/``--connect``/``--port`` are appended to the commands that take them.
+"""
+from __future__ import annotations
+
+import json
+import re
+import sqlite3
+import time
+from pathlib import Path
+
+import msgpack
+import pytest
+from tutorial_runner import REPO, Shell, Tutorial, filled, scaled, with_args
+
+from ports import free_port
+
+TUTORIALS = REPO / "docs" / "tutorials"
+TRAIN_STEPS = {"--max-steps 716800": "--max-steps 2048"}
+EVAL_EPISODES = {"--episodes 200": "--episodes 4"}
+SUCCESS_LINE = re.compile(r"success (\d+\.\d)% over (\d+) episodes, mean return ([+-]?\d+\.\d+)")
+
+
+@pytest.fixture
+def shell(tmp_path):
+    s = Shell(tmp_path)
+    yield s
+    s.stop_all()
+
+
+def local_endpoint() -> str:
+    return f"tcp/127.0.0.1:{free_port()}"
+
+
+def page_listing(url: str) -> dict:
+    """The page server's list message (matches, training runs, replays), as the page asks for it."""
+    from websockets.sync.client import connect
+    with connect(url.replace("http://", "ws://") + "ws") as ws:
+        ws.send(json.dumps({"op": "list"}))
+        while True:
+            message = msgpack.unpackb(ws.recv(timeout=30), raw=False)
+            if message["type"] == "list":
+                return message
+
+
+def wait_until(predicate, timeout_s: float, what: str):
+    end = time.monotonic() + timeout_s
+    while not (value := predicate()):
+        assert time.monotonic() < end, f"timed out after {timeout_s} s waiting for {what}"
+        time.sleep(0.2)
+    return value
+
+
+@pytest.mark.slow
+@pytest.mark.wall_clock
+def test_train_a_penalty_bot_and_watch_it(shell, tmp_path):
+    page = Tutorial(TUTORIALS / "train-penalty.md")
+    assert "env: minigames/penalty.yaml" in shell.run(page.command("Look at the config"))
+
+    shell.run(scaled(page.command("Train"), TRAIN_STEPS), timeout_s=600)
+    run_dir = tmp_path / "runs" / "my_penalty"
+    assert (run_dir / "final.pt").is_file() and json.loads((run_dir / "final.json").read_text())
+
+    for title in ("Evaluate your checkpoint", "Evaluate the shipped checkpoint"):
+        out = shell.run(scaled(page.command(title), EVAL_EPISODES))
+        rate, episodes, _ = SUCCESS_LINE.search(out).groups()
+        assert int(episodes) == 4 and 0.0 <= float(rate) <= 100.0 and "outcomes: " in out
+        if title == "Evaluate the shipped checkpoint":
+            assert float(rate) >= 75.0, out  # the shipped checkpoint scores 100 % over 200 episodes
+
+    endpoint = local_endpoint()
+    server = shell.start(with_args(page.command("Terminal 1: the match server"), "--listen", endpoint))
+    server.line("serving", 60)
+    web = shell.start(with_args(page.command("Terminal 2: the browser page"), "--port", "0", "--connect", endpoint))
+    url = web.line("page at ", 60).split()[2]
+
+    create, watch = page.commands("Terminal 3: create the match and record it")
+    assert "created match shootout" in shell.run(with_args(create, "--connect", endpoint))
+    watcher = shell.start(with_args(watch, "--connect", endpoint))
+    watcher.line("watching match shootout", 60)
+    wait_until(lambda: "shootout" in {m["id"] for m in page_listing(url)["matches"]}, 30, "the page to list the match")
+
+    out = shell.run(with_args(page.command("Terminal 4: your bot takes the penalties"), "--connect", endpoint))
+    assert "match shootout finished" in out, out
+    assert watcher.wait(60) == 0, watcher.output()
+    assert (tmp_path / "runs" / "shootout.npz").is_file()
+    listed = wait_until(lambda: page_listing(url)["replays"], 30, "the page to list the replay")
+    assert "runs/shootout.npz" in {r["id"] for r in listed}
+    [match] = [m for m in page_listing(url)["matches"] if m["id"] == "shootout"]
+    assert match["status"] == "finished"
+    web.stop()
+    server.stop()
+
+    alone = shell.start(with_args(page.command("The replay without a match server"), "--port", "0"))
+    url = alone.line("page at ", 60).split()[2]
+    assert "shootout.npz" in {r["id"] for r in page_listing(url)["replays"]}
+    page.assert_every_block_run()
