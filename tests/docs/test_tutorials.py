@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import json
 import re
-import sqlite3
 import time
 from pathlib import Path
 
@@ -21,6 +20,8 @@ import pytest
 from tutorial_runner import REPO, Shell, Tutorial, filled, scaled, with_args
 
 from ports import free_port
+
+from rocketdrl_ma.results import ResultsStore
 
 TUTORIALS = REPO / "docs" / "tutorials"
 TRAIN_STEPS = {"--max-steps 716800": "--max-steps 2048"}
@@ -101,4 +102,48 @@ def test_train_a_penalty_bot_and_watch_it(shell, tmp_path):
     alone = shell.start(with_args(page.command("The replay without a match server"), "--port", "0"))
     url = alone.line("page at ", 60).split()[2]
     assert "shootout.npz" in {r["id"] for r in page_listing(url)["replays"]}
+    page.assert_every_block_run()
+
+
+#: the packages the remote bot's page has the reader install, and the module each provides; the test does not
+#: install from PyPI, it checks that they are what the bot imports and that they import here
+BOT_PACKAGES = {"eclipse-zenoh": "zenoh", "msgpack": "msgpack", "cryptography": "cryptography"}
+
+
+@pytest.mark.wall_clock
+def test_a_bot_written_from_the_protocol_page_plays_a_match(shell, tmp_path):
+    page = Tutorial(TUTORIALS / "remote-bot.md")
+    install = page.command("Install the libraries").split()
+    assert install[:2] == ["pip", "install"] and sorted(install[2:]) == sorted(BOT_PACKAGES)
+    bot_source = page.write_files(tmp_path)["my_bot.py"].read_text()
+    imported = set(re.findall(r"^(?:import|from) (\w+)", bot_source, re.M))
+    assert "rocketdrl_ma" not in imported and set(BOT_PACKAGES.values()) <= imported
+    for module in BOT_PACKAGES.values():
+        __import__(module)
+
+    endpoint = local_endpoint()
+    server = shell.start(with_args(page.command("Terminal 1: the match server"), "--listen", endpoint))
+    server.line("serving", 60)
+    create, watch = page.commands("Terminal 2: create the match and watch it")
+    created = shell.run(with_args(create, "--connect", endpoint))
+    tickets = dict(line.split()[1:3] for line in created.splitlines() if line.startswith("ticket "))
+    assert sorted(tickets) == ["blue_0", "orange_0"], created
+    watcher = shell.start(with_args(watch, "--connect", endpoint))
+    watcher.line("watching match practice", 60)
+
+    opponent = shell.start(with_args(filled(page.command("Terminal 3: the opponent"),
+                                            {"<orange_0's ticket>": tickets["orange_0"]}), "--connect", endpoint))
+    out = shell.run(with_args(filled(page.command("Terminal 4: your bot"), {"<blue_0's ticket>": tickets["blue_0"]}),
+                              "--connect", endpoint), timeout_s=180)
+    assert "joined practice as blue_0" in out and re.search(r"match finished: blue \d+ - \d+ orange", out), out
+    assert opponent.wait(60) == 0, opponent.output()
+    assert watcher.wait(60) == 0, watcher.output()
+
+    out = shell.run(with_args(page.command("Inspect the match"), "--connect", endpoint))
+    info = json.loads(out[out.index("{"):])
+    blue = info["slot_status"]["blue_0"]
+    assert info["status"] == "finished" and blue["bot"] == "my-bot"
+    assert blue["received"] >= 0.9 * info["decision"] and info["rejected"] == {}, info
+    [result] = ResultsStore(tmp_path / "runs" / "server" / "results.sqlite").results()
+    assert result.entrants["blue_0"] == "my-bot"
     page.assert_every_block_run()

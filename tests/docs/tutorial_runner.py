@@ -188,12 +188,11 @@ class Shell:
         self.background: list[Background] = []
 
     def run(self, command: str, timeout_s: float = 120.0) -> str:
-        """Runs a command to its end; fails with its output unless it exits 0. Returns stdout and stderr."""
+        """Runs a command to its end; fails with its output unless it exits 0. Returns its standard output."""
         done = subprocess.run(["bash", "-c", command], cwd=self.folder, env=self.env, capture_output=True,
                               text=True, timeout=timeout_s)
-        output = done.stdout + done.stderr
-        assert done.returncode == 0, f"`{command}` exited {done.returncode}:\n{output}"
-        return output
+        assert done.returncode == 0, f"`{command}` exited {done.returncode}:\n{done.stdout}{done.stderr}"
+        return done.stdout
 
     def start(self, command: str) -> Background:
         """Starts a command that keeps running (a server); ``exec`` so the PID is the command's own."""
