@@ -147,3 +147,46 @@ def test_a_bot_written_from_the_protocol_page_plays_a_match(shell, tmp_path):
     [result] = ResultsStore(tmp_path / "runs" / "server" / "results.sqlite").results()
     assert result.entrants["blue_0"] == "my-bot"
     page.assert_every_block_run()
+
+
+#: the league's 5-minute matches become 1-minute ones (12 matches in about a minute on 2 cores)
+LEAGUE_CLOCK = {"match: matches/1v1.yaml": "overrides: {clock_s: 60.0}\nmatch: matches/1v1.yaml"}
+RATING_LINE = re.compile(r"^\s*(\d+)\. (\S+)\s+mu\s+(-?[\d.]+)\s+sigma\s+([\d.]+)\s+ordinal\s+(-?[\d.]+)"
+                         r"\s+W-D-L (\d+)-(\d+)-(\d+)$", re.M)
+
+
+def ratings(output: str) -> dict[str, tuple[int, int, int, int]]:
+    """Rank and W-D-L of each player in the ratings a league prints."""
+    return {m[2]: (int(m[1]), int(m[6]), int(m[7]), int(m[8])) for m in RATING_LINE.finditer(output)}
+
+
+@pytest.mark.slow
+def test_run_a_league_of_checkpoints(shell, tmp_path):
+    page = Tutorial(TUTORIALS / "league.md")
+    config = page.write_files(tmp_path)["my_league.yaml"]
+    assert "overrides:" not in config.read_text()
+    config.write_text(scaled(config.read_text(), LEAGUE_CLOCK))
+
+    out = shell.run(page.command("Play the league"), timeout_s=300)
+    assert "league my_league: 6 scheduled, 0 already stored, 6 played now" in out, out
+    first = ratings(out)
+    assert set(first) == {"kickstart_6.5M", "warm_0.6M", "ball_chaser"}
+    assert sum(w + d + l for _, w, d, l in first.values()) == 12  # 6 matches, 2 players each
+
+    report = shell.run(page.command("Read the report"))
+    for section in ("## Ratings", "## Payoff matrix", "## Team metrics"):
+        assert section in report
+    assert (tmp_path / "runs" / "league" / "my_league" / "ratings.png").stat().st_size > 0
+
+    with config.open("a") as f:
+        f.write(page.text("a fourth entrant for my_league.yaml"))
+    out = shell.run(page.command("Play the new entrant's matches"), timeout_s=300)
+    assert "league my_league: 12 scheduled, 6 already stored, 6 played now" in out, out
+    second = ratings(out)
+    assert set(second) == set(first) | {"goalie"}
+    assert second["kickstart_6.5M"][0] == 1, out  # the 6.5M self-play policy tops the league (6-0-0 in full matches)
+    assert len(ResultsStore(tmp_path / "runs" / "league" / "my_league.sqlite").results()) == 12
+
+    out = shell.run(page.command("Rate the stored matches"))
+    assert ratings(out) == second and "played now" not in out
+    page.assert_every_block_run()

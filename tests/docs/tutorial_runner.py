@@ -87,6 +87,12 @@ class Tutorial:
         [command] = self.commands(title)
         return command
 
+    def text(self, title: str) -> str:
+        """The text of the one non-shell block with this title (a snippet the reader adds to a file)."""
+        [block] = [b for b in self.blocks if b.lang != "sh" and b.title == title] or [None]
+        assert block is not None, f"{self.page.name}: no block titled {title!r}"
+        return block.text
+
     def files(self) -> dict[str, str]:
         out: dict[str, str] = {}
         for b in self.blocks:
