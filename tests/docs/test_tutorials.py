@@ -4,7 +4,8 @@ every shell block of its page.
 
 Scale-downs (explicit, and each test fails if the page no longer has the text it replaces):
 - training: the page's ``--max-steps 716800`` (8-9 minutes on 2 cores) becomes one batch, ``--max-steps 2048``;
-- evaluation: ``--episodes 200`` becomes ``--episodes 4``.
+- evaluation: ``--episodes 200`` becomes ``--episodes 4``;
+- the league: its 5-minute matches become 1-minute ones (``overrides: {clock_s: 60.0}`` added to the saved YAML).
 The match server and the page server listen on free ports instead of the defaults (7447, 8765), so a test never meets
 another server: ``--listen``/``--connect``/``--port`` are appended to the commands that take them.
 """
@@ -13,7 +14,6 @@ from __future__ import annotations
 import json
 import re
 import time
-from pathlib import Path
 
 import msgpack
 import pytest
