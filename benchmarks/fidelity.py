@@ -139,7 +139,7 @@ def main(argv=None) -> int:
             ours_ok, ours_err = False, f"{type(e).__name__}: {e}"
 
     t0 = time.perf_counter()
-    print("| quantity | reference (wiki / RocketSim doc) | RocketSim | ours | error % |")
+    print("| quantity | reference (wiki / docs/reference/physics.md) | RocketSim | ours | error % |")
     print("|---|---|---|---|---|")
     worst = 0.0
     for q in QUANTITIES:

@@ -1,8 +1,8 @@
 """Every number of the car-football model, in one place (Rocket League units: uu, uu/s, rad, s).
 
 Values follow RocketSim (``src/RLConst.h``, ``CarConfig.cpp``) and the RLBot wiki, as collected in the
-project's physics reference. Units are the game's: 1 uu = 1 cm. The PyBullet world runs in metres;
-``UU_PER_M`` converts at the boundary and nowhere else.
+project's physics reference (docs/reference/physics.md). Units are the game's: 1 uu = 1 cm. The PyBullet world runs
+in metres; ``UU_PER_M`` converts at the boundary and nowhere else.
 """
 from __future__ import annotations
 
@@ -19,7 +19,7 @@ ARENA_EXTENT_X = 4096.0
 ARENA_EXTENT_Y = 5120.0
 ARENA_HEIGHT = 2048.0
 ARENA_CORNER_SUM = 8064.0  # 45 degree corner planes: |x| + |y| = 8064
-ARENA_FILLET_RADIUS = 400.0  # floor-to-wall and wall-to-ceiling ramps (docs/guides/fidelity.md: the wiki says ~256)
+ARENA_FILLET_RADIUS = 400.0  # floor-to-wall and wall-to-ceiling ramps (wiki: ~256; docs/reference/physics.md, sec. 1)
 GOAL_HALF_WIDTH = 892.755
 GOAL_HEIGHT = 642.775
 GOAL_DEPTH = 880.0

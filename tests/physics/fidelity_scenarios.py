@@ -2,7 +2,7 @@
 
 Each ``measure_X(sim_factory) -> float`` builds a fresh simulator with ``sim_factory()``, runs a short (<= 5 s),
 deterministic script and returns one measured quantity in Rocket League units. ``QUANTITIES`` lists them with the
-documented reference value (physics-reference.md: RLBot wiki / our RocketSim measurements, section 12) and the
+documented reference value (docs/reference/physics.md: RLBot wiki / our RocketSim measurements, section 12) and the
 tolerances the tests use. ``TRAJECTORIES`` lists 2-second control scripts; ``run_trajectory`` returns the final car
 position and the car's path length.
 
@@ -277,7 +277,7 @@ class Quantity:
     key: str
     label: str
     measure: Callable
-    reference: float           # documented value (wiki / physics-reference.md section 12)
+    reference: float           # documented value (wiki / docs/reference/physics.md section 12)
     ref_source: str
     ref_rel_tol: float = 0.02  # how close the RocketSim oracle must be to ``reference`` (setup check)
     # Absolute tolerance floor for ours-vs-RocketSim: the scenario's measurement resolution, so a small number is

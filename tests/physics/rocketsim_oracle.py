@@ -5,7 +5,7 @@ Everything is in Rocket League units (uu, uu/s, rad; z up). ``rot_mat`` is 3x3 w
 RocketSim needs collision meshes before its first arena is made. ``init_rocketsim(dir)`` writes one dummy ``.cmf``
 mesh (a single tiny triangle at z = -5000) into ``dir/soccar/`` and calls ``RocketSim.init`` once per process, so only
 RocketSim's four built-in planes exist: floor z = 0, ceiling z = 2048, side walls x = +-4096 and no back walls
-(physics-reference.md sections 1 and 12). The fidelity scenarios therefore stay well inside |x| < 3500, |y| < 4600.
+(docs/reference/physics.md sections 1 and 12). The fidelity scenarios therefore stay well inside |x| < 3500, |y| < 4600.
 
 Interface of both adapters::
 
@@ -30,7 +30,7 @@ import numpy as np
 
 TICK_RATE = 120
 DT = 1.0 / TICK_RATE
-CAR_REST_Z = 17.03  # measured Octane resting CoM height (reference section 12)
+CAR_REST_Z = 17.03  # measured Octane resting CoM height (docs/reference/physics.md section 12)
 BALL_REST_Z = 93.15
 # Where the ball is parked in car-only scenarios: far from every scripted car path, away from walls and corners.
 BALL_PARKED = (3000.0, 4000.0, BALL_REST_Z)

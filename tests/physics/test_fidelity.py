@@ -1,4 +1,4 @@
-"""Fidelity of our physics against RocketSim, scenario by scenario (physics-reference.md, sections 4-7 and 12).
+"""Fidelity of our physics against RocketSim, scenario by scenario (docs/reference/physics.md, sections 4-7 and 12).
 
 For every quantity in ``fidelity_scenarios.QUANTITIES``:
 - ``test_rocketsim_oracle_matches_reference``: the RocketSim value is near the documented reference value. This checks
