@@ -11,7 +11,9 @@ is removed from the known-servers file.
 from __future__ import annotations
 
 import logging
+import random
 import threading
+import time
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
@@ -24,6 +26,8 @@ from .settings import ClientSettings
 log = logging.getLogger(__name__)
 #: a generous bound on any server message (observations carry the game state); refuses absurd ones
 MAX_SERVER_MESSAGE_BYTES = 4 * 1024 * 1024
+#: the first and the longest pause between two tries of an unanswered ``inspect`` (doubling in between)
+RETRY_FIRST_S, RETRY_MAX_S = 0.1, 4.0
 
 
 class ServerError(RuntimeError):
@@ -216,8 +220,28 @@ class LobbyClient:
     def list(self) -> list[dict]:
         return self.request("list")["matches"]
 
-    def inspect(self, match: str) -> dict:
-        return self.request("inspect", {"match": match})
+    def inspect(self, match: str, retry_s: float | None = None) -> dict:
+        """The match's status, slots and counters. While no signed reply comes back (a flooded, rate-limited
+        lobby; a lost reply) it asks again with exponential backoff and jitter for up to ``retry_s`` (default:
+        the client's ``inspect_retry_s``), then raises ``ServerGone`` saying how long it tried."""
+        retry_s = self.client.inspect_retry_s if retry_s is None else retry_s
+        give_up_at = time.monotonic() + retry_s
+        pause_s, tries = RETRY_FIRST_S, 0
+        while True:
+            tries += 1
+            try:
+                return self.request("inspect", {"match": match})
+            except ServerGone as e:
+                # full jitter: bots a flood silenced all at once do not all come back at once
+                wait_s = min(random.uniform(0.0, pause_s), give_up_at - time.monotonic())
+                if wait_s <= 0:
+                    if tries == 1:
+                        raise
+                    raise ServerGone(f"inspect {match!r}: {tries} tries over {retry_s:g} s (inspect_retry_s) got no "
+                                     f"signed reply; the server is gone or its lobby is flooded. Last: {e}") from None
+                log.info("inspect %r: no signed reply (%s); trying again in %.2f s", match, e, wait_s)
+                time.sleep(wait_s)
+                pause_s = min(2 * pause_s, RETRY_MAX_S)
 
     def stop(self, match: str) -> dict:
         return self.request("stop", {"match": match}, prove_with=self.admin_secret())
