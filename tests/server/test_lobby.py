@@ -227,7 +227,9 @@ def play_threads(*jobs) -> dict:
 
 
 def test_lockstep_match_with_sdk_bots_records_a_result(running):
-    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=60, seed=7)
+    # every decision must be answered: the server's longest deadline, which a busy machine does not miss, costs
+    # nothing here (lockstep moves on as soon as both bots answered)
+    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=60, seed=7, deadline_ms=2000)
     recorder = Recorder()
     reports = play_threads(
         ("blue", lambda: recorder.run("m", "blue_0", client=running.client_settings)),
