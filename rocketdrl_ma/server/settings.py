@@ -336,24 +336,23 @@ class Limits:
             raise ValueError(f"overrides: {not_allowed} may not be changed on this server; allowed: "
                              f"{sorted(self.overrides)}")
 
-    def check_observation(self, spec_name: str, builder, blue_size: int, orange_size: int,
-                          field: str = "observation") -> None:
+    def check_observation(self, spec_name: str, builder, blue_size: int, orange_size: int) -> None:
         """A slot's observation builder (``spec_name``: its registry name, ``a+b`` for a joined one) within
         this server's allow-list and budget for a match of these team sizes."""
         from rocketdrl_ma.env.observations import CombinedObs, RaySensor
 
         not_allowed = sorted({part.strip() for part in spec_name.split("+")} - set(self.observations))
         if not_allowed:
-            raise ValueError(f"{field}: builder(s) {not_allowed} are not allowed on this server; allowed: "
+            raise ValueError(f"observation: builder(s) {not_allowed} are not allowed on this server; allowed: "
                              f"{list(self.observations)} (limits.observations)")
         floats = int(builder.space(blue_size, orange_size).shape[0])
         if floats > self.max_observation_floats:
-            raise ValueError(f"{field}: {floats} floats a decision is over this server's limit of "
+            raise ValueError(f"observation: {floats} floats a decision is over this server's limit of "
                              f"{self.max_observation_floats} (limits.max_observation_floats)")
         parts = builder.builders if isinstance(builder, CombinedObs) else [builder]
         rays = sum(part.n_rays for part in parts if isinstance(part, RaySensor))
         if rays > self.max_observation_rays:
-            raise ValueError(f"{field}: {rays} rays a decision (summed over its ray sensors) is over this server's "
+            raise ValueError(f"observation: {rays} rays a decision (summed over its ray sensors) is over this server's "
                              f"limit of {self.max_observation_rays} (limits.max_observation_rays)")
 
     def check_game(self, config: dict) -> None:
