@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from .client import (JoinInfo, LobbyClient, SealedStream, ServerError, ServerGone, parse_rejoin_token,
+from .client import (Backoff, JoinInfo, LobbyClient, SealedStream, ServerError, ServerGone, parse_rejoin_token,
                      resolve_client)
 from .protocol import ENDED_STATUSES, MatchStatus, ProtocolError, action_message, decode_events, decode_state
 from .settings import DEFAULT_ENDPOINT, ClientSettings, ZenohSettings
@@ -190,28 +190,46 @@ class Bot:
     def _play(self, join: JoinInfo, lobby: LobbyClient, mailbox: _Mailbox, publisher, report: BotReport,
               idle_timeout_s: float | None) -> None:
         last_message = last_check = time.monotonic()
+        # set while the lobby gives no signed reply (flooded, rate limited): when to ask it again
+        backoff: Backoff | None = None
+        retry_at: float | None = None
         while True:
-            body = mailbox.take(0.5)
+            if retry_at is not None:
+                mailbox.server_left = False  # already asking the lobby: only a message ends the pause early
+            body = mailbox.take(0.5 if retry_at is None else min(0.5, max(0.0, retry_at - time.monotonic())))
             if body is None:
                 now = time.monotonic()
                 if idle_timeout_s is not None and now - last_message > idle_timeout_s:
                     raise TimeoutError(f"no message from match {join.match!r} for {idle_timeout_s} s")
-                if mailbox.server_left or now - max(last_message, last_check) > IDLE_CHECK_S:
+                due = now >= retry_at if retry_at is not None else \
+                    mailbox.server_left or now - max(last_message, last_check) > IDLE_CHECK_S
+                if due:
                     # Quiet for a while, or the server's liveliness went away (anyone may declare and drop
                     # a token on that key, so only a lobby without a signed reply means it is gone):
                     # not started yet, or did we miss the end? Ask the lobby.
-                    mailbox.server_left, last_check = False, now
+                    mailbox.server_left, last_check, retry_at = False, now, None
                     try:
-                        info = lobby.inspect(join.match)
+                        info = lobby.inspect(join.match, retry_s=0.0)
                     except ServerError:  # the server no longer knows the match: long over
                         info = {"status": MatchStatus.FINISHED, "instance": join.instance}
+                    except ServerGone as e:
+                        # asked again after a pause, waiting for observations meanwhile: a flood of the lobby
+                        # must not make a bot quit, nor miss its match while it waits for the lobby
+                        backoff = backoff or Backoff(lobby.client.inspect_retry_s)
+                        pause_s = backoff.next_pause_s()
+                        if pause_s is None:
+                            raise backoff.gave_up(f"inspect {join.match!r}", e) from None
+                        log.info("inspect %r: no signed reply (%s); trying again in %.2f s", join.match, e, pause_s)
+                        retry_at = time.monotonic() + pause_s
+                        continue
+                    backoff = None
                     if info.get("instance") != join.instance or info["status"] in ENDED_STATUSES:
                         report.summary, report.reason = info.get("summary"), info["status"]
                         self.on_end({"agent": join.slot, "done": True, "summary": report.summary,
                                      "reason": report.reason, "state": None})
                         return
                 continue
-            last_message = time.monotonic()
+            last_message, backoff, retry_at = time.monotonic(), None, None
             try:
                 info = {"agent": join.slot, "decision": body["decision"], "reward": body["reward"],
                         "scoreboard": body["scoreboard"], "events": decode_events(body["events"]),

@@ -11,7 +11,9 @@ is removed from the known-servers file.
 from __future__ import annotations
 
 import logging
+import random
 import threading
+import time
 from collections import Counter
 from dataclasses import dataclass
 from typing import Any
@@ -24,6 +26,8 @@ from .settings import ClientSettings
 log = logging.getLogger(__name__)
 #: a generous bound on any server message (observations carry the game state); refuses absurd ones
 MAX_SERVER_MESSAGE_BYTES = 4 * 1024 * 1024
+#: the first and the longest pause between two tries of an unanswered ``inspect`` (doubling in between)
+RETRY_FIRST_S, RETRY_MAX_S = 0.1, 4.0
 
 
 class ServerError(RuntimeError):
@@ -216,8 +220,20 @@ class LobbyClient:
     def list(self) -> list[dict]:
         return self.request("list")["matches"]
 
-    def inspect(self, match: str) -> dict:
-        return self.request("inspect", {"match": match})
+    def inspect(self, match: str, retry_s: float | None = None) -> dict:
+        """The match's status, slots and counters. While no signed reply comes back (a flooded, rate-limited
+        lobby; a lost reply) it asks again after ``Backoff``'s pauses for up to ``retry_s`` (default: the
+        client's ``inspect_retry_s``; 0: one try), then raises ``ServerGone`` saying how long it tried."""
+        backoff = Backoff(self.client.inspect_retry_s if retry_s is None else retry_s)
+        while True:
+            try:
+                return self.request("inspect", {"match": match})
+            except ServerGone as e:
+                pause_s = backoff.next_pause_s()
+                if pause_s is None:
+                    raise backoff.gave_up(f"inspect {match!r}", e) from None
+                log.info("inspect %r: no signed reply (%s); trying again in %.2f s", match, e, pause_s)
+                time.sleep(pause_s)
 
     def stop(self, match: str) -> dict:
         return self.request("stop", {"match": match}, prove_with=self.admin_secret())
@@ -237,6 +253,33 @@ class LobbyClient:
 
     def leave(self, match: str, slot: str, secret: bytes) -> dict:
         return self.request("leave", {"match": match, "slot": slot}, prove_with=secret)
+
+
+class Backoff:
+    """Pauses between the tries of a request without a signed reply: doubling from ``RETRY_FIRST_S`` up to
+    ``RETRY_MAX_S``, each drawn at random below that (full jitter: clients a flood silenced together do not
+    come back together), until ``total_s`` have passed since the first try."""
+
+    def __init__(self, total_s: float):
+        self.total_s, self.tries = total_s, 0
+        self._give_up_at = time.monotonic() + total_s
+        self._pause_s = RETRY_FIRST_S
+
+    def next_pause_s(self) -> float | None:
+        """After a failed try: the pause before the next one, or None once ``total_s`` is spent."""
+        self.tries += 1
+        remaining_s = self._give_up_at - time.monotonic()
+        if remaining_s <= 0:
+            return None
+        pause_s = min(random.uniform(0.0, self._pause_s), remaining_s)
+        self._pause_s = min(2 * self._pause_s, RETRY_MAX_S)
+        return pause_s
+
+    def gave_up(self, what: str, last: ServerGone) -> ServerGone:
+        if self.tries == 1:
+            return last
+        return ServerGone(f"{what}: {self.tries} tries over {self.total_s:g} s (inspect_retry_s) got no signed "
+                          f"reply; the server is gone or its lobby is flooded. Last: {last}")
 
 
 def _describe_unverified(raw: bytes) -> str:

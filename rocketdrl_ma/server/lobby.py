@@ -213,7 +213,7 @@ class MatchServer:
                                      "waiting or running")
             self._forget_old()
             runner = MatchRunner(match_id, options, self.session, self.keys, self.identity, self._record,
-                                 creator=creator, missed_streak=limits.missed_streak)
+                                 creator=creator, limits=limits)
             self.matches[match_id] = runner
         runner.start()
         log.info("match %s created by %s (%s, %s)", match_id, creator or "the server", options.config, options.mode)

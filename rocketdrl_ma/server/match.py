@@ -31,7 +31,7 @@ from rocketdrl_ma.rules.events import GameEvent, Goal
 from .crypto import KeyExchange, ServerIdentity, action_mac, random_bytes, same_mac
 from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state, pack_value, seal,
                        split_action, unpack_map)
-from .settings import MatchOptions
+from .settings import Limits, MatchOptions
 from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations
 
 log = logging.getLogger(__name__)
@@ -66,12 +66,14 @@ def _percentile_ms(values: list[float], q: float) -> float | None:
 
 class MatchRunner:
     """A match from creation to its result. ``session`` is the server's Zenoh session, ``identity`` its
-    signing key; ``creator`` the user who created it (None: the server's own YAML)."""
+    signing key; ``creator`` the user who created it (None: the server's own YAML); ``limits`` bound what
+    its bots (and, for a lobby-created match, its creator) may ask for."""
 
     def __init__(self, match_id: str, options: MatchOptions, session, keys: Keys, identity: ServerIdentity,
-                 record: Callable[[MatchResult], None], creator: str | None = None, missed_streak: int = 0):
+                 record: Callable[[MatchResult], None], creator: str | None = None, limits: Limits | None = None):
         self.id, self.options, self.session, self.keys, self._record = match_id, options, session, keys, record
-        self.identity, self.creator, self.missed_streak = identity, creator, missed_streak
+        self.limits = limits or Limits()
+        self.identity, self.creator, self.missed_streak = identity, creator, self.limits.missed_streak
         overrides = dict(options.overrides)
         env_config = load_config(options.config, overrides)  # ValueError naming the key if bad
         self.config = env_config
@@ -87,6 +89,13 @@ class MatchRunner:
         if unknown:
             self.env.close()
             raise ValueError(f"seats: {unknown} are not slots of this match; slots: {list(self.slots)}")
+        if creator is not None:
+            try:
+                self.limits.check_observation(env_config["observation"]["name"], self.env.obs_builder,
+                                              self.env.rules.blue_size, self.env.rules.orange_size)
+            except ValueError:
+                self.env.close()
+                raise
         self.tickets: dict[str, str] = {}
         for slot in self.slots.values():
             slot.seat = options.seats.get(slot.name)
@@ -136,8 +145,9 @@ class MatchRunner:
         exchange (``client_key``)."""
         args = request.args
         name = args.get("name", "bot")
-        if not isinstance(name, str) or not 0 < len(name) <= 64:
-            raise ValueError(f"name: expected a bot name of 1-64 characters, got {name!r}")
+        # printable only: the name is shown on terminals, where control characters would restyle them
+        if not isinstance(name, str) or not 0 < len(name) <= 64 or not name.isprintable():
+            raise ValueError(f"name: expected a bot name of 1-64 printable characters, got {name!r}")
         wanted = self._slot_arg(args, required=False)
         exchange = KeyExchange()
         with self._cond:
@@ -165,7 +175,9 @@ class MatchRunner:
                 obs_spec = _spec(args["observation"], "observation")
                 options = {k: v for k, v in obs_spec.items() if k != "name"}
                 obs_builder = make_obs_builder(obs_spec["name"], **options)
-                obs_builder.space(self.env.rules.blue_size, self.env.rules.orange_size)  # fits this match?
+                # fits this match, and this server's budget?
+                self.limits.check_observation(obs_spec["name"], obs_builder, self.env.rules.blue_size,
+                                              self.env.rules.orange_size)
             if args.get("action") is not None:
                 action_spec = _spec(args["action"], "action")
                 action_parser = make_action_parser(action_spec["name"],

@@ -260,7 +260,11 @@ class Limits:
     may change; ``fill``: the policy specs that may play empty slots (shell-style patterns);
     ``missed_streak``: that many missed decisions in a row count as a disconnect (the match stops waiting
     for the slot until its next action; 0: never); ``requests_per_s``/``request_burst``: lobby requests
-    per user, ten times that in all (0: no limit).
+    per user, ten times that in all (0: no limit). A slot's observation (the one its bot asks for at the
+    join, or a lobby-created match's own) is built on the match thread at every decision, so it is
+    bounded: ``observations``: the builders it may use (each part of a ``+``-joined spec);
+    ``max_observation_floats``: its size; ``max_observation_rays``: the rays cast for it, summed over
+    every ray sensor it joins (the builders' main cost).
     """
     max_matches: int = 16
     max_matches_per_user: int = 4
@@ -279,6 +283,9 @@ class Limits:
     fill: tuple[str, ...] = ("idle", "scripted:*")
     requests_per_s: float = 50.0
     request_burst: int = 100
+    observations: tuple[str, ...] = ("seed_sensors", "ray", "team_relative", "seed_barrier", "seed_aerial")
+    max_observation_floats: int = 1024
+    max_observation_rays: int = 64
 
     @classmethod
     def from_dict(cls, d: Any) -> "Limits":
@@ -296,6 +303,12 @@ class Limits:
                     or value < 0 or (isinstance(f.default, int) and not isinstance(value, int)):
                 kind = "an integer" if isinstance(f.default, int) else "a finite number"
                 raise ValueError(f"limits.{f.name}: expected {kind} >= 0, got {value!r}")
+        if "observations" in d:
+            from rocketdrl_ma.env.observations import OBS_BUILDERS
+            unknown = sorted(set(d["observations"]) - set(OBS_BUILDERS))
+            if unknown:
+                raise ValueError(f"limits.observations: {unknown} are not observation builders; allowed: "
+                                 f"{sorted(OBS_BUILDERS)}")
         limits = cls(**d)
         if limits.min_deadline_ms > limits.max_deadline_ms:
             raise ValueError("limits.min_deadline_ms: larger than limits.max_deadline_ms")
@@ -322,6 +335,25 @@ class Limits:
         if not_allowed:
             raise ValueError(f"overrides: {not_allowed} may not be changed on this server; allowed: "
                              f"{sorted(self.overrides)}")
+
+    def check_observation(self, spec_name: str, builder, blue_size: int, orange_size: int) -> None:
+        """A slot's observation builder (``spec_name``: its registry name, ``a+b`` for a joined one) within
+        this server's allow-list and budget for a match of these team sizes."""
+        from rocketdrl_ma.env.observations import CombinedObs, RaySensor
+
+        not_allowed = sorted({part.strip() for part in spec_name.split("+")} - set(self.observations))
+        if not_allowed:
+            raise ValueError(f"observation: builder(s) {not_allowed} are not allowed on this server; allowed: "
+                             f"{list(self.observations)} (limits.observations)")
+        floats = int(builder.space(blue_size, orange_size).shape[0])
+        if floats > self.max_observation_floats:
+            raise ValueError(f"observation: {floats} floats a decision is over this server's limit of "
+                             f"{self.max_observation_floats} (limits.max_observation_floats)")
+        parts = builder.builders if isinstance(builder, CombinedObs) else [builder]
+        rays = sum(part.n_rays for part in parts if isinstance(part, RaySensor))
+        if rays > self.max_observation_rays:
+            raise ValueError(f"observation: {rays} rays a decision (summed over its ray sensors) is over this server's "
+                             f"limit of {self.max_observation_rays} (limits.max_observation_rays)")
 
     def check_game(self, config: dict) -> None:
         """Bounds on the resolved game config (after overrides)."""
@@ -500,6 +532,9 @@ class ClientSettings:
     announces (remembered from then on; several different announced keys are refused).
     ``admin_secret_file`` or ``admin_secret`` (hex): for create and stop (default
     ``<key_dir>/admin.secret`` if it exists). ``key_dir`` defaults to ``runs/server/<server>``.
+    ``inspect_retry_s``: how long an ``inspect`` (a waiting bot's "is my match still on?") goes on asking,
+    with exponential backoff and jitter, while no signed reply comes back (a lobby rate-limited by a flood,
+    a lost reply) before the server counts as gone; 0: one try.
     """
     server: str = "local"
     zenoh: ZenohSettings = field(default_factory=lambda: ZenohSettings(mode="client", connect=(DEFAULT_ENDPOINT,)))
@@ -510,6 +545,7 @@ class ClientSettings:
     admin_secret: str | None = None
     trust_on_first_use: bool = True
     known_servers: str | None = None
+    inspect_retry_s: float = 30.0
 
     @classmethod
     def from_dict(cls, d: dict) -> "ClientSettings":
@@ -531,6 +567,10 @@ class ClientSettings:
             parse_secret(d["admin_secret"], "admin_secret")
         if not isinstance(d.get("trust_on_first_use", True), bool):
             raise ValueError(f"trust_on_first_use: expected true or false, got {d['trust_on_first_use']!r}")
+        retry_s = d.get("inspect_retry_s", 0.0)
+        if isinstance(retry_s, bool) or not isinstance(retry_s, (int, float)) or not math.isfinite(retry_s) \
+                or retry_s < 0:
+            raise ValueError(f"inspect_retry_s: expected a finite number of seconds >= 0, got {retry_s!r}")
         settings = cls(**d)
         if settings.zenoh.mode != "client":
             raise ValueError(f"zenoh.mode: a bot, spectator or lobby client connects as a client (Zenoh access "

@@ -36,8 +36,10 @@ def scoreboard(match: str, message: StateUpdate | None, recent: list[str]):
         table.add_column(column)
     for slot, s in message.slots.items():
         style = "blue" if slot.startswith("blue") else "dark_orange"
-        table.add_row(slot, str(s["bot"]), s["occupant"], "yes" if s["connected"] else "no", str(s["received"]),
-                      str(s["missed"] + s["disconnected"]), str(s["late"]), str(s["invalid"]), style=style)
+        # Text cells, never markup: a bot names itself, and "[/]" in a name would crash the view
+        cells = (slot, s["bot"], s["occupant"], "yes" if s["connected"] else "no", s["received"],
+                 s["missed"] + s["disconnected"], s["late"], s["invalid"])
+        table.add_row(*(Text(str(cell)) for cell in cells), style=style)
     return Group(table, Text("\n".join(recent[-5:])))
 
 
@@ -67,7 +69,8 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
                 writer = ReplayWriter(replay_path, meta={"match": match, "server": spectator.client.server,
                                                          "config": info["game_config"]})
             # Subscribed from here on: a caller (or a test) knows which states the replay can hold.
-            console.print(f"watching match {match} on server {spectator.client.server!r} (status {info['status']})")
+            console.print(f"watching match {match} on server {spectator.client.server!r} (status {info['status']})",
+                          markup=False)
             latest, recent, final = None, [], None
             with Live(scoreboard(match, None, recent), console=console, auto_refresh=False,
                       transient=False) if live else _NoLive() as view:
@@ -85,7 +88,7 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
                 console.line()  # the live view leaves its cursor at the end of its last line
             if spectator.dropped:
                 console.print(f"dropped {sum(spectator.dropped.values())} messages that failed the checks: "
-                              f"{dict(spectator.dropped)}")
+                              f"{dict(spectator.dropped)}", markup=False)
         if writer is not None:
             writer.close()
             if video:

@@ -174,9 +174,10 @@ class RawBot:
     tests that need to send exactly what they choose: late, missing, malformed or forged actions."""
 
     def __init__(self, session, lobby: LobbyClient, match: str, slot: str | None = None, answer=None,
-                 **join_fields):
+                 before_alive=None, **join_fields):
         """``answer(message)`` runs on each verified observation as it arrives and may return an action to
-        send at once (None: stay silent)."""
+        send at once (None: stay silent). ``before_alive(bot)`` runs once seated, before the liveliness token
+        that lets the match start (e.g. to send decision 0's action ahead, free of any deadline)."""
         self.session, self._answer = session, answer
         self.join = lobby.join(match, slot, **join_fields)
         self.messages: list[dict] = []
@@ -189,6 +190,8 @@ class RawBot:
             session.declare_subscriber(keys["obs"], self._on_obs),
             session.declare_subscriber(keys["error"], self._on_error),
         ]
+        if before_alive is not None:
+            before_alive(self)
         self._token = session.liveliness().declare_token(self.join.keys["alive"])
 
     def _on_obs(self, sample) -> None:

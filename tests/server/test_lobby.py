@@ -10,7 +10,7 @@ import msgpack
 import numpy as np
 import pytest
 from gymnasium import spaces
-from server_helpers import SHORT, RawBot
+from server_helpers import SHORT, RawBot, wait_for
 
 from rocketdrl_ma.env.actions import SeedActions
 from rocketdrl_ma.policies.scripted import make_scripted
@@ -227,7 +227,9 @@ def play_threads(*jobs) -> dict:
 
 
 def test_lockstep_match_with_sdk_bots_records_a_result(running):
-    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=60, seed=7)
+    # every decision must be answered: the server's longest deadline, which a busy machine does not miss, costs
+    # nothing here (lockstep moves on as soon as both bots answered)
+    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=60, seed=7, deadline_ms=2000)
     recorder = Recorder()
     reports = play_threads(
         ("blue", lambda: recorder.run("m", "blue_0", client=running.client_settings)),
@@ -264,15 +266,25 @@ def test_readiness_timeout_fills_empty_slots(running):
 
 @pytest.mark.parametrize("replacement", ["repeat", "neutral"])
 def test_missing_actions_are_replaced_and_counted(running, replacement):
-    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=0.5, fill="idle",
-                         deadline_ms=20, replacement=replacement)
+    running.lobby.create("matches/1v1.yaml", "m", overrides=SHORT, ready_timeout_s=120, deadline_ms=20,
+                         replacement=replacement)
     states = []
     sub = running.session.declare_subscriber(running.server.keys.state("m"), lambda s: states.append(
         open_sealed(running.lobby.server_key, s.payload.to_bytes(), 1 << 24)))
     full_throttle = np.array([1, 0, 0, 0, 0, -1, -1, -1], np.float32)
+    coast = np.array([0, 0, 0, 0, 0, -1, -1, -1], np.float32)
+    blue_0 = lambda: running.lobby.inspect("m")["slot_status"]["blue_0"]  # noqa: E731
+
+    def send_decision_0(bot: RawBot) -> None:
+        # sent and received before the match may start, so no deadline can miss it on a busy machine
+        bot.send(full_throttle, 0)
+        wait_for(lambda: blue_0()["received"] == 1, 30, "blue's action for decision 0 to arrive")
+        assert running.lobby.inspect("m")["status"] == "waiting"
+
+    # orange answers every decision; the match starts once both bots are seated and alive
+    orange = RawBot(running.session, running.lobby, "m", "orange_0", answer=lambda m: coast)
     # Full throttle at decision 0, then silence: every later decision misses its deadline
-    bot = RawBot(running.session, running.lobby, "m", "blue_0",
-                 answer=lambda m: full_throttle if m["decision"] == 0 else None)
+    bot = RawBot(running.session, running.lobby, "m", "blue_0", before_alive=send_decision_0)
     info = running.wait_status("m")
     controls = [s["state"]["last_controls"]["blue_0"][0] for s in states if s["decision"] >= 3]
     assert controls and set(controls) == ({1.0} if replacement == "repeat" else {0.0})
@@ -284,6 +296,7 @@ def test_missing_actions_are_replaced_and_counted(running, replacement):
     assert ResultsStore(running.results).results()[0].details["missed_decisions"]["blue_0"] == info["decision"] - 1
     sub.undeclare()
     bot.disconnect()
+    orange.disconnect()
 
 
 def test_realtime_mode_ticks_at_wall_clock(running):
