@@ -2,6 +2,7 @@
 writes its candidates' tallies and a tuning file the rotator reads; its choices combine as its help says."""
 from __future__ import annotations
 
+import functools
 import importlib.util
 import json
 import subprocess
@@ -16,9 +17,12 @@ TOOL = REPO / "tools" / "search_kickoffs.py"
 DIAGONAL, OFF_CENTRE, BACK = KickoffLane.DIAGONAL, KickoffLane.OFF_CENTRE, KickoffLane.BACK
 
 
+@functools.cache
 def _tool():
+    """The tool as a module (it is a script, not part of the package)."""
     spec = importlib.util.spec_from_file_location("search_kickoffs", TOOL)
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclasses look their module up
     spec.loader.exec_module(module)
     return module
 
