@@ -129,8 +129,8 @@ class Goalie(ScriptedBot):
 
 
 class FlipChaser(ScriptedBot):
-    """The ball-chaser's game with its losing habits fixed: it won 78 of 80 full 1v1 matches against the
-    ball-chaser, and 69 of 80 with both bots' controls through the lookup table.
+    """The ball-chaser's game with its losing habits fixed, so it beats the ball-chaser, also through the lookup
+    table (the matches: docs/experiments/rotator-tuning.md).
 
     - **Kickoff**: full boost straight at the ball and a forward dodge 0.2 s before contact, so it gets there
       first and faster (the ball-chaser stops boosting 800 uu short of the ball).
@@ -234,7 +234,7 @@ class Rotator(ScriptedBot):
         car = state.cars[agent]
         if car.is_demoed:
             return CarControls()
-        if _on_its_side_against_a_wall(car, self.STANDING_UU_S):  # a covering car stuck there sat out 80 s
+        if _on_its_side_against_a_wall(car, self.STANDING_UU_S):  # every role: no other rule gets a car off there
             return _air_row(jump=True)
         view = rotation.team_view(agent, state)
         if saves.jump_to_save(car.on_ground, car.is_jumping, float(car.rot_mat[2, 2]), view.pos[agent], view.vel[agent],
