@@ -43,6 +43,8 @@ class KickoffTable:
 
 @dataclass(frozen=True)
 class RotatorTuning:
+    """The settings ``rotation.py`` plays by, one field per key of the tuning file. Its dicts are not changed in
+    place: ``dataclasses.replace`` (or ``with_kickoff_table``) makes a variant."""
     rotating_cars: int             # cars that rotate outside kickoffs; the team's others are pressers
     wrong_side_cost_s: float       # the first man's pick: a car upfield of the ball pays this for turning round
     keep_role_bonus_s: float       # the last toucher near the ball keeps the first man's role at this head start
