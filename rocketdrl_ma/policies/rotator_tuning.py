@@ -36,7 +36,8 @@ Layout = tuple[KickoffLane, KickoffLane]
 class KickoffTable:
     """One team size's kickoff: how far beside the ball the second taker aims by layout (uu along x, towards its own
     side of the long axis when positive; a layout not listed aims at the ball's centre), and the layouts where the
-    nearest car goes alone and the other stays back."""
+    nearest car goes alone and the other stays back. The lanes are read every decision and a car staying back drives
+    into the back lane, so ``alone`` names the layouts a kickoff turns into on the way too."""
     second_aim_uu: dict[Layout, float]
     alone: frozenset[Layout]
 
