@@ -130,11 +130,14 @@ env = rocketdrl_ma.parallel_env("minigames/penalty.yaml")
 env.reset(seed=0)
 policy.reset(env.game_state)
 print("controls", policy.controls("blue_0", env.game_state))
+from rocketdrl_ma.policies.scripted import make_scripted
+print("rotator rotates", make_scripted("rotator").tuning.rotating_cars)  # its settings file is the wheel's
 Path("own.yaml").write_text("mode: match\\nteam_size: 2\\nclock_s: 7.0\\n")  # a file of that name wins
 print("own", rocketdrl_ma.parallel_env("own.yaml").possible_agents)
 """
     out = run([str(bin_dir / "python"), "-c", script], elsewhere, env)
     assert "controls CarControls(" in out and "own ['blue_0', 'blue_1', 'orange_0', 'orange_1']" in out
+    assert "rotator rotates 2" in out
 
 
 @pytest.mark.slow

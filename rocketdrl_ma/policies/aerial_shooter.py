@@ -12,8 +12,8 @@ is behind the ball on its line to the goal, so the car's nose meets the ball fro
 It is stateless and reads only what ``seed_aerial+team_relative`` shows a learner: the car's and the ball's
 positions, velocities, orientation and angular velocity, the car's height and jump state, and the release
 countdown (``mode_state``). It needs pitch, yaw and roll, so it plays through the continuous actions (RLGym's
-lookup table snaps its stick), not the seed's five buttons. It scores 94.5 % at difficulty 1 (`rocketdrl-ma eval
-scripted:aerial_shooter --env minigames/aerial.yaml --episodes 200`; README).
+lookup table snaps its stick), not the seed's five buttons. Its score at difficulty 1: `rocketdrl-ma eval
+scripted:aerial_shooter --env minigames/aerial.yaml --episodes 200` (the figures: docs/experiments/index.md).
 """
 from __future__ import annotations
 

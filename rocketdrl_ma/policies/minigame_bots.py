@@ -1,12 +1,8 @@
 """Scripted shooters for the minigames: teachers for imitation and kickstarting, and baselines for learned policies.
 
 ``BarrierShooter`` plays the Barrier free kick. A chip over the standing 300 uu wall is out of reach of a
-single touch on a ball at rest: measured on the RocketSim-matched contacts, a ground hit launches the ball at
-most ~14 deg above the floor (car speeds 300-2300 uu/s), and jumping into the ball only flattens the shot (the
-rising car meets the ball higher up); in a search over approach speed, jump timing and hold, pitch and dodges
-no single touch put the ball above ~290 uu anywhere 560-1340 uu out, where it must be above ~393 uu to clear
-the wall. So the shooter plays the ball *under* a lifted barrier (a soft ground shot, so it stays below the
-bottom edge) and *around* a standing one (it dribbles the ball to a point beside the nearer end, then shoots
+single touch on a ball at rest (the search that showed it: docs/experiments/index.md). So the shooter plays the
+ball *under* a lifted barrier (a soft ground shot, so it stays below the bottom edge) and *around* a standing one (it dribbles the ball to a point beside the nearer end, then shoots
 from there). It works out from the state alone, every decision, which of these it is doing, so one instance
 plays any number of cars and episodes (as a kickstart teacher must).
 

@@ -1,10 +1,9 @@
 """The save jump: a car in the path of a ball on its way into the car's own goal, which would pass over the
 car's roof but within what a jump reaches, jumps into it.
 
-Goal histories of 3v3 matches (rotators against flip-chasers) showed the ball bouncing over a car on its goal line: in
-15 of 75 goals conceded the ball passed within 200 uu of a rotator's centre on its way in, most of them 120-220 uu
-up, above the roof of a car on its wheels (README, "The save jump"). Everything here is in a team's frame (the own
-goal at -y) and assumes a straight flight under gravity, so a bounce or a touch on the way voids the prediction.
+A ball on its way in often passes over the roof of a car on its goal line but within reach of a jump (the goal
+histories that showed it: docs/experiments/rotator-tuning.md). Everything here is in a team's frame (the own goal at
+-y) and assumes a straight flight under gravity, so a bounce or a touch on the way voids the prediction.
 """
 from __future__ import annotations
 

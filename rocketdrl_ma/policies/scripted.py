@@ -20,6 +20,7 @@ from rocketdrl_ma.validation import check_name
 from .base import Policy
 from . import rotation, saves
 from .rotation import Role
+from .rotator_tuning import RotatorTuning, shipped_tuning
 
 ATTACK_GOAL = np.array([0.0, C.ARENA_EXTENT_Y + 200.0, 0.0])  # in the team frame: always +y
 OWN_GOAL = np.array([0.0, -C.ARENA_EXTENT_Y, 0.0])
@@ -128,8 +129,8 @@ class Goalie(ScriptedBot):
 
 
 class FlipChaser(ScriptedBot):
-    """The ball-chaser's game with its losing habits fixed: it won 78 of 80 full 1v1 matches against the
-    ball-chaser, and 69 of 80 with both bots' controls through the lookup table.
+    """The ball-chaser's game with its losing habits fixed, so it beats the ball-chaser, also through the lookup
+    table (the matches: docs/experiments/rotator-tuning.md).
 
     - **Kickoff**: full boost straight at the ball and a forward dodge 0.2 s before contact, so it gets there
       first and faster (the ball-chaser stops boosting 800 uu short of the ball).
@@ -211,6 +212,7 @@ class Rotator(ScriptedBot):
     demoed) it is the flip-chaser with that dodge. A car of any role standing on its side against a wall jumps off
     it. At a kickoff the second car aims beside the ball, by the kickoff layout (``rotation.kickoff_aim``).
     Stateless, lookup-table rows only (a lookup clone can copy it), one instance plays any number of cars.
+    ``tuning``: the searched settings it plays by (default: the shipped ones, ``rotator_tuning.py``).
     """
 
     bot_name = "rotator"
@@ -224,38 +226,39 @@ class Rotator(ScriptedBot):
     #: rule jumps below 200 uu/s): a covering car that slows on a side wall on its way back drives on down
     STANDING_UU_S = 30.0
 
-    def __init__(self) -> None:
+    def __init__(self, tuning: RotatorTuning | None = None) -> None:
         self.chaser = FlipChaser()
+        self.tuning = shipped_tuning() if tuning is None else tuning
 
     def controls(self, agent: str, state: GameState) -> CarControls:
         car = state.cars[agent]
         if car.is_demoed:
             return CarControls()
-        if _on_its_side_against_a_wall(car, self.STANDING_UU_S):  # a covering car stuck there sat out 80 s
+        if _on_its_side_against_a_wall(car, self.STANDING_UU_S):  # every role: no other rule gets a car off there
             return _air_row(jump=True)
         view = rotation.team_view(agent, state)
         if saves.jump_to_save(car.on_ground, car.is_jumping, float(car.rot_mat[2, 2]), view.pos[agent], view.vel[agent],
                               view.ball_pos, view.ball_vel):
             return _air_row(jump=True)
-        roles = rotation.assign_roles(view, state.last_touch)
+        roles = rotation.assign_roles(view, state.last_touch, self.tuning)
         role = roles.get(agent, Role.FIRST)
         if role is Role.FIRST and car.on_ground and rotation.is_kickoff(view):
             rot = _team_rot(agent, car.rot_mat)
             return self.chaser.kickoff_run(view.pos[agent], rot, float(view.vel[agent] @ rot[:, 0]),
-                                           rotation.kickoff_aim(view, agent))
-        if role in (Role.FIRST, Role.PRESSER) or rotation.follow_up(view, roles) == agent:
+                                           rotation.kickoff_aim(view, agent, self.tuning))
+        if role in (Role.FIRST, Role.PRESSER) or rotation.follow_up(view, roles, self.tuning) == agent:
             dodge = self._finish_dodge(agent, state, view) or self._shot_dodge(agent, state, view)
             return dodge or self.chaser.controls(agent, state)
         pos, rot = team_frame(agent, car.pos), _team_rot(agent, car.rot_mat)
         ball = rotation.ball_ahead(view)
         if role is Role.LAST:
-            spot = rotation.last_man_spot(ball, roles)
+            spot = rotation.last_man_spot(ball, roles, self.tuning)
         else:
             rank = sum(1 for a, r in roles.items() if r is Role.SECOND and a != agent and view.pos[a][1] > pos[1])
             spot = rotation.support_spot(ball, rank=1 + rank)
         pads = team_frame(agent, C.BOOST_PAD_POSITIONS)
         team_size = sum(1 for a in state.cars if agent_team(a) == agent_team(agent))
-        target = rotation.boost_on_the_way(pos, spot, car.boost, state.pad_timers, pads, team_size)
+        target = rotation.boost_on_the_way(pos, spot, car.boost, state.pad_timers, pads, team_size, self.tuning)
         if target is None:
             target = spot
         target = _around_ball(pos, target, view.ball_pos, self.BALL_CLEARANCE_UU)

@@ -27,7 +27,7 @@ def play(env, bot, seed: int) -> tuple[dict, dict, bool]:
 
 def test_aerial_shooter_scores_the_seeds_aerial_with_an_aerial_touch():
     """Difficulty 1 (the seed's 550-900 uu ball, a touch above 400 uu), 24 fixed seeds: goals that count, each after
-    a double jump and the round's aerial touch (over 200 episodes it scores 94.5 %: README)."""
+    a double jump and the round's aerial touch (its score over 200 episodes: docs/experiments/index.md)."""
     env = rocketdrl_ma.parallel_env("minigames/aerial.yaml", action="continuous")
     bot = AerialShooter()
     goals = 0

@@ -89,7 +89,7 @@ def test_the_eval_command_plays_a_scripted_bot_on_the_env_it_names(capsys):
     assert main(["eval", "scripted:aerial_shooter", *aerial]) == 0
     out = capsys.readouterr().out
     assert out.startswith("scripted:aerial_shooter: success ") and "outcomes: goal" in out
-    assert float(out.split("success ")[1].split("%")[0]) >= 50.0  # 94.5 % over 200 episodes (README)
+    assert float(out.split("success ")[1].split("%")[0]) >= 50.0  # a floor for 4 episodes of a bot that scores most
     assert main(["eval", "scripted:idle", *aerial]) == 0
     assert "scripted:idle: success 0.0% over 4 episodes" in capsys.readouterr().out
     duel = ["--env", "minigames/penalty_duel.yaml", "--episodes", "2", "--n-envs", "2"]

@@ -22,7 +22,7 @@ def play(env, bot, seed: int) -> dict:
 @pytest.mark.parametrize("action", ["seed", "continuous"])
 def test_barrier_shooter_scores_under_lifted_and_around_standing_barriers(action):
     """Difficulty 1 (the seed's task), 24 fixed seeds: every lifted barrier is scored under, and most standing
-    ones around (on unseen seeds it scores ~89 %: README)."""
+    ones around (its score on unseen seeds: docs/experiments/index.md)."""
     env = rocketdrl_ma.parallel_env("minigames/barrier.yaml", action=action)
     bot = make_scripted("barrier_shooter")
     outcomes = {True: [], False: []}

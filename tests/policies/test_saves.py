@@ -71,8 +71,7 @@ SHOTS_OVER_THE_ROOF = list(itertools.product([2500.0, 3000.0], [160.0, 200.0, 24
 
 
 def test_a_rotator_in_its_goal_jumps_into_shots_that_would_pass_over_its_roof(monkeypatch):
-    """Measured: the keeper saves all 12 shots, and concedes all 12 with the save jump taken away (one of them off
-    its roof)."""
+    """Shots only a jump reaches: the keeper saves every one, and with the save jump taken away every one goes in."""
     saved = [_shot_over_the_keeper(*shot) for shot in SHOTS_OVER_THE_ROOF]
     assert all(not goal and jumped and toucher == "blue_1" for goal, jumped, toucher in saved), saved
     monkeypatch.setattr(saves, "jump_to_save", lambda *args: False)
