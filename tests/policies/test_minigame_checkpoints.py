@@ -1,6 +1,6 @@
 """The shipped minigame checkpoints still play their game: a few greedy episodes on seeds no training run used, at
-difficulty 1, through the evaluation of docs/results.md's table (``rocketdrl-ma eval``, with ``--opponent`` for the penalty
-duel's two learners)."""
+difficulty 1, through the evaluation of docs/results.md's table (``rocketdrl-ma eval``, with ``--opponent`` for the
+penalty duel's two learners)."""
 from pathlib import Path
 
 import pytest
