@@ -170,7 +170,7 @@ def test_run_a_league_of_checkpoints(shell, tmp_path):
     out = shell.run(page.command("Play the league"), timeout_s=300)
     assert "league my_league: 6 scheduled, 0 already stored, 6 played now" in out, out
     first = ratings(out)
-    assert set(first) == {"kickstart_6.5M", "warm_0.6M", "ball_chaser"}
+    assert set(first) == {"kickstart_6.5M", "first_run_1.09M", "ball_chaser"}
     assert sum(w + d + l for _, w, d, l in first.values()) == 12  # 6 matches, 2 players each
 
     report = shell.run(page.command("Read the report"))
@@ -185,6 +185,7 @@ def test_run_a_league_of_checkpoints(shell, tmp_path):
     second = ratings(out)
     assert set(second) == set(first) | {"goalie"}
     assert second["kickstart_6.5M"][0] == 1, out  # the 6.5M self-play policy tops the league (6-0-0 in full matches)
+    assert second["first_run_1.09M"][0] == 4, out  # the first run wins no match and rates last (0-2-4 in full matches)
     assert len(ResultsStore(tmp_path / "runs" / "league" / "my_league.sqlite").results()) == 12
 
     out = shell.run(page.command("Rate the stored matches"))
