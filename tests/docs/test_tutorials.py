@@ -185,7 +185,6 @@ def test_run_a_league_of_checkpoints(shell, tmp_path):
     second = ratings(out)
     assert set(second) == set(first) | {"goalie"}
     assert second["kickstart_6.5M"][0] == 1, out  # the 6.5M self-play policy tops the league (6-0-0 in full matches)
-    assert second["first_run_1.09M"][0] == 4, out  # the first run wins no match and rates last (0-2-4 in full matches)
     assert len(ResultsStore(tmp_path / "runs" / "league" / "my_league.sqlite").results()) == 12
 
     out = shell.run(page.command("Rate the stored matches"))
