@@ -1,0 +1,395 @@
+"""The game-shaped soccar arena: Rocket League's collision surface as analytic pieces (uu, z up).
+
+Its dimensions are ``GAME_ARENA`` (data, measured on RocketSim's soccar meshes by
+``tests/physics/arena_mesh_profile.py``); this module only turns them into a surface. It is the ``"game"`` arena
+shape; ``arena_geometry`` is the ``"classic"`` one (one 400 uu fillet everywhere).
+
+**Pieces.** The playable space is the union of five convex-ish pieces:
+
+- the *field*: the octagon (side walls, back walls, 45 degree corner walls) whose vertical corners are rounded
+  (``side_corner_rounding``, ``corner_back_rounding``), with a profile swept along that outline: a floor fillet
+  whose radius depends on where along the outline it is (256 on the side and corner walls, tapering to 160 round
+  the corner-to-back rounding and to 96 beside the posts) and a ceiling fillet (512);
+- per goal a *mouth* piece: the opening in the back wall, 904 uu half-wide and 648 high at the wall, bevelled by
+  8 uu at 45 degrees onto the net's 896 x 640, its edges to the floor and roof rounded by 96;
+- per goal the *net*: the slab |x| <= 896 intersected with the net's y-z section (floor flat then rising 16 uu,
+  a half cylinder of radius 240 at the back, the roof flat then sloping down onto it), the edges where the slab
+  meets the section rounded by 96.
+
+**Distance.** Each piece's inside distance is exact or nearly (the floor fillet's radius varies slowly along the
+outline); the union is their maximum, a lower bound near the seams. ``game_surface_contacts`` checks each piece's
+nearest point against the others (a point inside another piece is not surface) and adds the post and crossbar
+edges, as ``arena_geometry.surface_contacts`` does. ``game_arena_raycast`` sphere-traces the union (its distance is
+a lower bound, so no step overshoots). ``game_arena_mesh`` sweeps the same profiles and drops the triangles that
+lie inside another piece.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+
+@dataclass(frozen=True)
+class GameArenaDimensions:
+    """Rocket League's soccar arena in uu, from circle fits to cross-sections of RocketSim's collision meshes
+    (``tests/physics/arena_mesh_profile.py``; the fits are listed in docs/experiments/arena-mesh.md)."""
+    side_x: float = 4096.0             # side walls |x| =
+    back_y: float = 5120.0             # back walls |y| =
+    corner_sum: float = 8064.0         # corner walls |x| + |y| =
+    height: float = 2048.0             # ceiling z =
+    # the vertical roundings (circle fits at z = 1000): tangent to the corner walls, 2.0 and 3.3 uu short of the
+    # side and back walls (the game's walls step out there)
+    side_corner_rounding: float = 864.27
+    side_corner_rounding_centre: tuple[float, float] = (3229.7, 3612.3)
+    corner_back_rounding: float = 852.09
+    corner_back_rounding_centre: tuple[float, float] = (2593.8, 4264.6)
+    floor_fillet: float = 256.0        # side and corner walls to the floor
+    back_floor_fillet: float = 160.0   # back walls to the floor, |x| >= back_fillet_taper_end_x
+    post_floor_fillet: float = 96.0    # back walls to the floor, |x| <= back_fillet_taper_start_x
+    back_fillet_taper_start_x: float = 1000.0
+    back_fillet_taper_end_x: float = 1300.0
+    ceiling_fillet: float = 520.0      # every wall to the ceiling
+    goal_half_width: float = 896.0     # the net's side walls |x| =
+    goal_height: float = 640.0         # the roof behind the crossbar
+    frame_bevel: float = 8.0           # posts and crossbar: 45 degree bevels from the back wall onto the net
+    net_edge_rounding: float = 96.0    # the net's side walls to its floor, roof and back
+    net_roof_slope_start_y: float = 5344.0  # |y| where the roof starts sloping down onto the back
+    net_floor_rise_start_y: float = 5355.0  # |y| where the floor starts rising
+    net_floor_rise: float = 16.0       # uu the floor has risen at net_back_centre_y
+    net_back_centre_y: float = 5760.0  # the back half cylinder's axis (|y|, z)
+    net_back_centre_z: float = 256.0
+    net_back_radius: float = 240.0     # reaches |y| = 6000
+
+
+GAME_ARENA = GameArenaDimensions()
+
+_D = GAME_ARENA
+SIDE_X, BACK_Y, CORNER_SUM, HEIGHT = _D.side_x, _D.back_y, _D.corner_sum, _D.height
+R1, R2 = _D.side_corner_rounding, _D.corner_back_rounding
+SQRT2 = math.sqrt(2.0)
+SQRT_HALF = math.sqrt(0.5)
+C1X, C1Y = _D.side_corner_rounding_centre
+C2X, C2Y = _D.corner_back_rounding_centre
+RF_SIDE, RF_BACK, RF_POST = _D.floor_fillet, _D.back_floor_fillet, _D.post_floor_fillet
+TAPER_X0, TAPER_X1 = _D.back_fillet_taper_start_x, _D.back_fillet_taper_end_x
+RC = _D.ceiling_fillet
+GW, GH, BEVEL = _D.goal_half_width, _D.goal_height, _D.frame_bevel
+MOUTH_W = GW + BEVEL                       # the opening at the back wall
+MOUTH_H = GH + BEVEL
+NET_R = _D.net_edge_rounding
+ROOF_Y = _D.net_roof_slope_start_y
+RISE_Y = _D.net_floor_rise_start_y
+BACK_CY, BACK_CZ, BACK_R = _D.net_back_centre_y, _D.net_back_centre_z, _D.net_back_radius
+RISE_K = _D.net_floor_rise / (BACK_CY - RISE_Y)  # floor slope
+RISE_N = 1.0 / math.sqrt(1.0 + RISE_K * RISE_K)
+# the roof's slope: the line from (ROOF_Y, GH) tangent to the back circle (on its upper side)
+_dy, _dz = BACK_CY - ROOF_Y, BACK_CZ - GH
+_L = math.hypot(_dy, _dz)
+_ang = math.atan2(_dz, _dy) + math.asin(BACK_R / _L)
+ROOF_DIR_Y, ROOF_DIR_Z = math.cos(_ang), math.sin(_ang)  # along the roof from (ROOF_Y, GH) down to the tangent
+ROOF_NY, ROOF_NZ = ROOF_DIR_Z, -ROOF_DIR_Y  # the slope's normal into the net (down and forward)
+ROOF_C = ROOF_NY * ROOF_Y + ROOF_NZ * GH
+PIECE_START_Y = BACK_Y - RF_BACK - 64.0    # the goal pieces start inside the field (the mouth's floor runs flat)
+assert ROOF_NZ < 0.0 and C2X > MOUTH_W and C1Y > 0.0
+
+_FAR = 1e30
+RAY_TOL = 1e-4          # uu: a sphere-traced ray has hit when the distance is below this
+RAY_MAX_STEPS = 400
+MESH_MAX_EDGE = 500.0   # longest edge of the flat mesh parts (uu)
+
+
+# ================================================================= the field
+@njit(cache=True, inline="always")
+def _floor_fillet(piece, ax, t):
+    """The floor fillet's radius at the outline point of ``piece`` (0 side, 1 side rounding, 2 corner,
+    3 corner rounding, 4 back) at parameter t (the rounding's angle share, or |x| on the back wall)."""
+    if piece <= 2:
+        return RF_SIDE
+    if piece == 3:  # 256 to 160 round the corner-to-back rounding (measured: between linear and smoothstep)
+        s = min(max(t, 0.0), 1.0)
+        w = 0.5 * (s + s * s * (3.0 - 2.0 * s))
+        return RF_SIDE + (RF_BACK - RF_SIDE) * w
+    if ax >= TAPER_X1:
+        return RF_BACK
+    if ax <= TAPER_X0:
+        return RF_POST
+    return RF_POST + (RF_BACK - RF_POST) * (ax - TAPER_X0) / (TAPER_X1 - TAPER_X0)
+
+
+@njit(cache=True)
+def _outline(ax, ay):
+    """Signed distance from the folded point (|x|, |y|) to the rounded octagon (positive outside), the outward
+    unit normal (folded) of its nearest point, and that point's piece and parameter (see ``_floor_fillet``)."""
+    # the Voronoi wedges of the convex outline's pieces, from the centres of the roundings
+    ux, uy = ax - C1X, ay - C1Y
+    if uy >= 0.0 and ux >= uy:  # side-to-corner rounding
+        L = math.sqrt(ux * ux + uy * uy)
+        if L > 1e-9:
+            out_d = L - R1
+            if out_d >= 0.0 or -out_d < _inside_others(ax, ay, 1):
+                return out_d, ux / L, uy / L, 1, math.atan2(uy, ux) / (0.25 * math.pi)
+    vx, vy = ax - C2X, ay - C2Y
+    if vx >= 0.0 and vy >= vx:  # corner-to-back rounding
+        L = math.sqrt(vx * vx + vy * vy)
+        if L > 1e-9:
+            out_d = L - R2
+            if out_d >= 0.0 or -out_d < _inside_others(ax, ay, 3):
+                return out_d, vx / L, vy / L, 3, (math.atan2(vy, vx) - 0.25 * math.pi) / (0.25 * math.pi)
+    # the flat walls: the nearest of the three lines whose segment the point projects onto
+    e_side = ax - SIDE_X
+    e_back = ay - BACK_Y
+    e_corner = (ax + ay - CORNER_SUM) * SQRT_HALF
+    best, nx, ny, piece = -_FAR, 0.0, 0.0, 0
+    if ay <= C1Y and e_side > best:
+        best, nx, ny, piece = e_side, 1.0, 0.0, 0
+    if ax <= C2X and e_back > best:
+        best, nx, ny, piece = e_back, 0.0, 1.0, 4
+    if ay - ax >= C1Y - SIDE_X and ay - ax <= BACK_Y - C2X and e_corner > best:
+        best, nx, ny, piece = e_corner, SQRT_HALF, SQRT_HALF, 2
+    if best <= -_FAR:  # beyond every wedge (far outside, numerically): the largest line distance
+        best, nx, ny, piece = max(e_side, e_back, e_corner), 1.0, 0.0, 0
+    return best, nx, ny, piece, 0.0
+
+
+@njit(cache=True, inline="always")
+def _inside_others(ax, ay, which):
+    """Inside distance to the flat walls (a point in a rounding's wedge may still be nearer a wall inside)."""
+    d = _FAR
+    if ay <= C1Y:
+        d = min(d, SIDE_X - ax)
+    if ax <= C2X:
+        d = min(d, BACK_Y - ay)
+    if ay - ax >= C1Y - SIDE_X and ay - ax <= BACK_Y - C2X:
+        d = min(d, (CORNER_SUM - ax - ay) * SQRT_HALF)
+    return d
+
+
+@njit(cache=True)
+def _field(x, y, z):
+    """Signed distance to the field (positive inside) and its unit gradient (into the field)."""
+    sx = 1.0 if x >= 0.0 else -1.0
+    sy = 1.0 if y >= 0.0 else -1.0
+    ax, ay = abs(x), abs(y)
+    s, ox, oy, piece, t = _outline(ax, ay)
+    rf = _floor_fillet(piece, ax, t)
+    a = -s  # inside distance from the wall
+    if a < rf and z < rf:  # the floor fillet
+        u, v = rf - a, rf - z
+        L = math.sqrt(u * u + v * v)
+        if L > 1e-12:
+            return rf - L, -sx * ox * u / L, -sy * oy * u / L, v / L
+        return rf, 0.0, 0.0, 1.0
+    c = HEIGHT - z
+    if a < RC and c < RC:  # the ceiling fillet
+        u, v = RC - a, RC - c
+        L = math.sqrt(u * u + v * v)
+        if L > 1e-12:
+            return RC - L, -sx * ox * u / L, -sy * oy * u / L, -v / L
+        return RC, 0.0, 0.0, -1.0
+    if a <= z and a <= c:
+        return a, -sx * ox, -sy * oy, 0.0
+    if z <= c:
+        return z, 0.0, 0.0, 1.0
+    return c, 0.0, 0.0, -1.0
+
+
+# ================================================================= the goals
+@njit(cache=True, inline="always")
+def _round_join(a, ga, b, gb, r):
+    """Inside distance of the intersection of two sets (inside distances a, b and their gradients) with the edge
+    between them rounded by r."""
+    if a < r and b < r:
+        u, v = r - a, r - b
+        L = math.sqrt(u * u + v * v)
+        if L > 1e-12:
+            return r - L, (u * ga[0] + v * gb[0]) / L, (u * ga[1] + v * gb[1]) / L, (u * ga[2] + v * gb[2]) / L
+    if a <= b:
+        return a, ga[0], ga[1], ga[2]
+    return b, gb[0], gb[1], gb[2]
+
+
+@njit(cache=True)
+def _net_section(ay, z):
+    """Inside distance of the net's y-z section (folded |y|) and its gradient (gy, gz): the floor (flat, then
+    rising), the roof (flat, then sloping) and, behind the back's axis, the half cylinder."""
+    d, gy, gz = z, 0.0, 1.0  # floor
+    f = (z - RISE_K * (ay - RISE_Y)) * RISE_N  # rising floor
+    if f < d:
+        d, gy, gz = f, -RISE_K * RISE_N, RISE_N
+    f = GH - z  # roof
+    if f < d:
+        d, gy, gz = f, 0.0, -1.0
+    f = ROOF_C - (ROOF_NY * ay + ROOF_NZ * z)  # sloping roof (its normal points out of the net)
+    f = -f
+    if f < d:
+        d, gy, gz = f, ROOF_NY, ROOF_NZ
+    u, v = ay - BACK_CY, z - BACK_CZ
+    if u > 0.0 and u * ROOF_NZ - v * ROOF_NY <= 0.0:  # the half cylinder, up to where the roof's slope meets it
+        L = math.sqrt(u * u + v * v)
+        f = BACK_R - L
+        if f < d and L > 1e-12:
+            d, gy, gz = f, -u / L, -v / L
+    f = ay - PIECE_START_Y  # the front, inside the field
+    if f < d:
+        d, gy, gz = f, 1.0, 0.0
+    return d, gy, gz
+
+
+@njit(cache=True)
+def _net(x, y, z):
+    """Signed distance to the net on y's side (positive inside) and its gradient."""
+    sx = 1.0 if x >= 0.0 else -1.0
+    sy = 1.0 if y >= 0.0 else -1.0
+    b, gy, gz = _net_section(abs(y), z)
+    return _round_join(GW - abs(x), (-sx, 0.0, 0.0), b, (0.0, sy * gy, gz), NET_R)
+
+
+@njit(cache=True)
+def _mouth(x, y, z):
+    """Signed distance to the goal mouth on y's side (the opening in the back wall with its bevels, from inside
+    the field to where the bevels meet the net) and its gradient."""
+    sx = 1.0 if x >= 0.0 else -1.0
+    sy = 1.0 if y >= 0.0 else -1.0
+    ax, ay = abs(x), abs(y)
+    # across: |x| <= MOUTH_W and the bevel |x| + |y| <= MOUTH_W + back_y
+    a, gax, gay = MOUTH_W - ax, -sx, 0.0
+    f = (MOUTH_W + BACK_Y - ax - ay) * SQRT_HALF
+    if f < a:
+        a, gax, gay = f, -sx * SQRT_HALF, -sy * SQRT_HALF
+    # up: floor, roof z <= MOUTH_H and its bevel z + |y| <= MOUTH_H + back_y, front and back (the net takes over)
+    b, gby, gbz = z, 0.0, 1.0
+    f = MOUTH_H - z
+    if f < b:
+        b, gby, gbz = f, 0.0, -1.0
+    f = (MOUTH_H + BACK_Y - z - ay) * SQRT_HALF
+    if f < b:
+        b, gby, gbz = f, -sy * SQRT_HALF, -SQRT_HALF
+    f = ay - PIECE_START_Y
+    if f < b:
+        b, gby, gbz = f, sy, 0.0
+    f = BACK_Y + BEVEL + 1.0 - ay
+    if f < b:
+        b, gby, gbz = f, -sy, 0.0
+    return _round_join(a, (gax, gay, 0.0), b, (0.0, gby, gbz), NET_R)
+
+
+@njit(cache=True)
+def game_arena_sdf(x, y, z):
+    """(d, nx, ny, nz): signed distance in uu (positive in the playable space) and the unit normal into it."""
+    d, nx, ny, nz = _field(x, y, z)
+    if abs(y) > PIECE_START_Y:
+        g, gx, gy, gz = _net(x, y, z)
+        if g > d:
+            d, nx, ny, nz = g, gx, gy, gz
+        g, gx, gy, gz = _mouth(x, y, z)
+        if g > d:
+            d, nx, ny, nz = g, gx, gy, gz
+    return d, nx, ny, nz
+
+
+@njit(cache=True)
+def _sdf_many(points):
+    out = np.empty(points.shape[0])
+    for i in range(points.shape[0]):
+        out[i] = game_arena_sdf(points[i, 0], points[i, 1], points[i, 2])[0]
+    return out
+
+
+def game_arena_sdf_many(points: np.ndarray) -> np.ndarray:
+    """``game_arena_sdf`` distances of an (n, 3) array of points."""
+    return _sdf_many(np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3))
+
+
+# ================================================================= contacts
+@njit(cache=True)
+def _piece(k, x, y, z):
+    if k == 0:
+        return _field(x, y, z)
+    if k == 1:
+        return _net(x, y, z)
+    return _mouth(x, y, z)
+
+
+@njit(cache=True)
+def _on_surface(qx, qy, qz, own):
+    """Whether a surface point of piece ``own`` (0 field, 1 net, 2 mouth; -1 an edge) lies inside no other piece."""
+    for k in range(3):
+        if k != own and (k == 0 or abs(qy) > PIECE_START_Y) and _piece(k, qx, qy, qz)[0] > 1e-3:
+            return False
+    return True
+
+
+@njit(cache=True)
+def _add(out, n, d, nx, ny, nz):
+    """Row n of ``out`` = (d, normal) unless the same contact is there already. Returns the count."""
+    for r in range(n):
+        if abs(out[r, 0] - d) < 1e-3 and out[r, 1] * nx + out[r, 2] * ny + out[r, 3] * nz > 1.0 - 1e-6:
+            return n
+    if n < out.shape[0]:
+        out[n, 0], out[n, 1], out[n, 2], out[n, 3] = d, nx, ny, nz
+        n += 1
+    return n
+
+
+@njit(cache=True)
+def _add_point(out, n, x, y, z, qx, qy, qz, reach):
+    """The surface point q (an edge's or a bevel's nearest point) as a contact, the normal from q to the centre."""
+    dx, dy, dz = x - qx, y - qy, z - qz
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if d <= 1e-9 or d > reach or not _on_surface(qx, qy, qz, -1):
+        return n
+    return _add(out, n, d, dx / d, dy / d, dz / d)
+
+
+@njit(cache=True)
+def game_surface_contacts(x, y, z, reach, out):
+    """Where a sphere at (x, y, z) reaching ``reach`` uu meets the game arena: rows (distance, nx, ny, nz) of
+    ``out`` (normals into the arena), one per surface it reaches. Returns the number of rows.
+
+    Each piece's nearest point counts if no other piece covers it; near a goal the bevels of the posts and the
+    crossbar are added as strips (their nearest point, which is an edge when the centre is off the strip), as a
+    triangle mesh would give them."""
+    n = 0
+    near_goal = abs(y) > PIECE_START_Y - reach and abs(x) < MOUTH_W + RF_BACK + reach and z < MOUTH_H + reach
+    for k in range(3 if near_goal else 1):
+        d, nx, ny, nz = _piece(k, x, y, z)
+        if d <= reach and _on_surface(x - nx * d, y - ny * d, z - nz * d, k):
+            n = _add(out, n, d, nx, ny, nz)
+    if not near_goal or game_arena_sdf(x, y, z)[0] < 0.0:
+        return n
+    sx = 1.0 if x >= 0.0 else -1.0
+    sy = 1.0 if y >= 0.0 else -1.0
+    ax, ay = abs(x), abs(y)
+    # the post's bevel: from (MOUTH_W, back_y) to (GW, back_y + BEVEL) in (|x|, |y|), between the roundings
+    t = min(max(((MOUTH_W - ax) - (ay - BACK_Y)) * 0.5 / BEVEL, 0.0), 1.0)
+    qz = min(max(z, NET_R), GH - NET_R)
+    n = _add_point(out, n, x, y, z, sx * (MOUTH_W - t * BEVEL), sy * (BACK_Y + t * BEVEL), qz, reach)
+    # the crossbar's bevel: from (back_y, MOUTH_H) to (back_y + BEVEL, GH) in (|y|, z)
+    t = min(max(((MOUTH_H - z) + (ay - BACK_Y)) * 0.5 / BEVEL, 0.0), 1.0)
+    qx = min(max(x, -(GW - NET_R)), GW - NET_R)
+    n = _add_point(out, n, x, y, z, qx, sy * (BACK_Y + t * BEVEL), MOUTH_H - t * BEVEL, reach)
+    return n
+
+
+# ================================================================= ray casts
+@njit(cache=True)
+def game_arena_raycast(ox, oy, oz, dx, dy, dz, max_len):
+    """First surface hit of the unit ray (dx, dy, dz) from (ox, oy, oz) within max_len uu: (hit, t, nx, ny, nz),
+    the normal pointing into the interior. Sphere tracing: the union's distance never exceeds the distance to the
+    surface, so each step stays in the playable space. An origin in solid hits at t = 0 with the distance field's
+    normal; a miss returns (False, max_len, 0, 0, 0)."""
+    d, nx, ny, nz = game_arena_sdf(ox, oy, oz)
+    if d < 0.0:
+        return True, 0.0, nx, ny, nz
+    t = 0.0
+    for _ in range(RAY_MAX_STEPS):
+        if d <= RAY_TOL:
+            return True, t, nx, ny, nz
+        t += d
+        if t > max_len:
+            return False, max_len, 0.0, 0.0, 0.0
+        d, nx, ny, nz = game_arena_sdf(ox + dx * t, oy + dy * t, oz + dz * t)
+    return True, t, nx, ny, nz
