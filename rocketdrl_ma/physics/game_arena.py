@@ -393,3 +393,198 @@ def game_arena_raycast(ox, oy, oz, dx, dy, dz, max_len):
             return False, max_len, 0.0, 0.0, 0.0
         d, nx, ny, nz = game_arena_sdf(ox + dx * t, oy + dy * t, oz + dz * t)
     return True, t, nx, ny, nz
+
+
+# ================================================================= the surface mesh
+ROUNDING_SEGMENTS = 16  # mesh pieces per 45 degrees of a vertical rounding
+
+
+def _quadrant_outline() -> list[tuple[float, float, float, float, int, float]]:
+    """(x, y, outward nx, ny, piece, parameter) stations along the outline in the first quadrant, from the side
+    wall at y = 0 to the back wall at x = 0 (pieces and parameters as ``_floor_fillet`` reads them)."""
+    out = []
+    for y in np.linspace(0.0, C1Y, max(2, math.ceil(C1Y / MESH_MAX_EDGE)) + 1)[:-1]:
+        out.append((SIDE_X, float(y), 1.0, 0.0, 0, 0.0))
+    for a in np.linspace(0.0, 0.25 * math.pi, ROUNDING_SEGMENTS + 1):
+        out.append((C1X + R1 * math.cos(a), C1Y + R1 * math.sin(a), math.cos(a), math.sin(a), 1, a / (0.25 * math.pi)))
+    for a in np.linspace(0.25 * math.pi, 0.5 * math.pi, ROUNDING_SEGMENTS + 1):
+        out.append((C2X + R2 * math.cos(a), C2Y + R2 * math.sin(a), math.cos(a), math.sin(a), 3,
+                    (a - 0.25 * math.pi) / (0.25 * math.pi)))
+    xs = sorted({0.0, MOUTH_W, TAPER_X0, TAPER_X1, *np.linspace(TAPER_X0, TAPER_X1, 7).tolist(),
+                 *np.linspace(0.0, MOUTH_W, 5).tolist(), *np.linspace(TAPER_X1, C2X, 5).tolist()}, reverse=True)
+    for x in xs:
+        if x < C2X - 1e-6:
+            out.append((float(x), BACK_Y, 0.0, 1.0, 4, 0.0))
+    return out
+
+
+def _field_profile(rf: float, segments: int) -> list[tuple[float, float]]:
+    """(inside distance from the wall a, z) from the floor's edge up the fillet, the wall and the ceiling fillet."""
+    floor = [(rf - rf * math.cos(th), rf - rf * math.sin(th)) for th in np.linspace(0.5 * math.pi, 0.0, segments + 1)]
+    wall = [(0.0, z) for z in (MOUTH_H, *np.linspace(rf, HEIGHT - RC, 4)[1:-1]) if rf < z < HEIGHT - RC]
+    wall.sort(key=lambda p: p[1])
+    ceiling = [(RC - RC * math.cos(th), HEIGHT - RC + RC * math.sin(th)) for th in np.linspace(0.0, 0.5 * math.pi,
+                                                                                             segments + 1)]
+    return floor + wall + ceiling
+
+
+class _Mesh:
+    def __init__(self) -> None:
+        self.verts: list[tuple[float, float, float]] = []
+        self.tris: list[tuple[int, int, int]] = []
+
+    def v(self, p) -> int:
+        self.verts.append((float(p[0]), float(p[1]), float(p[2])))
+        return len(self.verts) - 1
+
+    def grid(self, rows: list[list[tuple[float, float, float]]], closed: bool = False) -> None:
+        """Quads between consecutive rows of the same length (closed: the last row joins the first)."""
+        ids = [[self.v(p) for p in row] for row in rows]
+        pairs = list(zip(ids[:-1], ids[1:])) + ([(ids[-1], ids[0])] if closed else [])
+        for r0, r1 in pairs:
+            for k in range(len(r0) - 1):
+                self.tris.append((r0[k], r1[k], r1[k + 1]))
+                self.tris.append((r0[k], r1[k + 1], r0[k + 1]))
+
+    def fan(self, ring: list[tuple[float, float, float]]) -> None:
+        c = self.v(np.mean(np.array(ring), axis=0))
+        ids = [self.v(p) for p in ring]
+        for a, b in zip(ids, ids[1:] + ids[:1]):
+            self.tris.append((c, a, b))
+
+
+def _field_rows(segments: int) -> list[list[tuple[float, float, float]]]:
+    quadrant = _quadrant_outline()
+    ring = []
+    for sx, sy, rev in ((1.0, 1.0, False), (-1.0, 1.0, True), (-1.0, -1.0, False), (1.0, -1.0, True)):
+        q = quadrant[::-1] if rev else quadrant
+        ring += [(sx * x, sy * y, sx * nx, sy * ny, piece, t) for x, y, nx, ny, piece, t in q]
+    rows = []
+    for x, y, nx, ny, piece, t in ring:
+        rf = _floor_fillet(piece, abs(x), t)
+        rows.append([(x - a * nx, y - a * ny, z) for a, z in _field_profile(rf, segments)])
+    return rows
+
+
+def _rounded_section(w: float, lo: float, hi: float, segments: int) -> list[tuple[float, float]]:
+    """(x, z) round the rectangle |x| <= w, lo <= z <= hi with corners rounded by NET_R, from the floor's middle."""
+    r = NET_R
+    pts = [(0.0, lo)]
+    for cx, cz, a0 in ((w - r, lo + r, -0.5 * math.pi), (w - r, hi - r, 0.0), (-(w - r), hi - r, 0.5 * math.pi),
+                       (-(w - r), lo + r, math.pi)):
+        pts += [(cx + r * math.cos(a), cz + r * math.sin(a)) for a in np.linspace(a0, a0 + 0.5 * math.pi, segments + 1)]
+    return pts + [(0.0, lo)]
+
+
+def _mouth_rows(sy: float, segments: int) -> list[list[tuple[float, float, float]]]:
+    ys = [PIECE_START_Y, BACK_Y - RF_POST, *np.linspace(BACK_Y - RF_POST, BACK_Y, 5)[1:], BACK_Y + BEVEL]
+    rows = []
+    for y in ys:
+        w = min(MOUTH_W, MOUTH_W + BACK_Y - y)
+        h = min(MOUTH_H, MOUTH_H + BACK_Y - y)
+        rows.append([(x, sy * y, z) for x, z in _rounded_section(w, 0.0, h, segments)])
+    return rows
+
+
+def _net_stations(segments: int) -> list[tuple[float, float, float, float]]:
+    """(|y|, z, inward ny, nz) round the net's y-z section from the mouth's floor to the mouth's roof."""
+    rise = (-RISE_K * RISE_N, RISE_N)
+    out = [(BACK_Y + BEVEL, 0.0, 0.0, 1.0), (RISE_Y, 0.0, 0.0, 1.0), (RISE_Y, 0.0, *rise), (BACK_CY, RISE_K * (
+        BACK_CY - RISE_Y), *rise)]
+    top = math.atan2(-ROOF_NZ, -ROOF_NY)
+    for a in np.linspace(-0.5 * math.pi, top, 6 * segments + 1):
+        out.append((BACK_CY + BACK_R * math.cos(a), BACK_CZ + BACK_R * math.sin(a), -math.cos(a), -math.sin(a)))
+    tangent = out[-1]
+    out.append((tangent[0], tangent[1], ROOF_NY, ROOF_NZ))
+    out += [(ROOF_Y, GH, ROOF_NY, ROOF_NZ), (ROOF_Y, GH, 0.0, -1.0), (BACK_Y + BEVEL, GH, 0.0, -1.0)]
+    return out
+
+
+def _net_rows(sy: float, segments: int) -> tuple[list[list[tuple[float, float, float]]], list]:
+    """The net's floor, back and roof with their rounded edges (rows across x) and its two side walls (rings)."""
+    r = NET_R
+    rows = []
+    for y, z, ny, nz in _net_stations(segments):
+        row = []
+        for sx, a0, a1 in ((-1.0, 0.5 * math.pi, 0.0), (1.0, 0.0, 0.5 * math.pi)):
+            for phi in np.linspace(a0, a1, segments + 1):
+                off = r * (1.0 - math.cos(phi))
+                row.append((sx * (GW - r + r * math.sin(phi)), sy * (y + ny * off), z + nz * off))
+        rows.append(row)
+    sides = []
+    for sx in (1.0, -1.0):
+        sides.append([(sx * GW, sy * (y + ny * r), z + nz * r) for y, z, ny, nz in _net_stations(segments)])
+    return rows, sides
+
+
+def game_arena_mesh(segments: int = 8, with_floor_and_ceiling: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The interior boundary as (vertices (N, 3) float64 uu, triangles (M, 3) int32), wound so the right-hand
+    normals face the interior; every vertex lies on ``game_arena_sdf``'s zero level. Without the floor and ceiling
+    (the physics world's planes), the parts of them at z = 0 and z = height are left out."""
+    if segments < 1:
+        raise ValueError(f"segments: must be >= 1, got {segments!r}")
+    m = _Mesh()
+    m.grid(_field_rows(segments), closed=True)
+    for sy in (1.0, -1.0):
+        m.grid(_mouth_rows(sy, segments))
+        rows, sides = _net_rows(sy, segments)
+        m.grid(rows)
+        for ring in sides:
+            m.fan(ring)
+    v = np.array(m.verts)
+    t = np.array(m.tris, dtype=np.int64)
+    if with_floor_and_ceiling:
+        _add_floor_and_ceiling(m, v)
+        v, t = np.array(m.verts), np.array(m.tris, dtype=np.int64)
+    t = _keep_surface(v, t, with_floor_and_ceiling)
+    used, t = np.unique(t, return_inverse=True)
+    return v[used], t.reshape(-1, 3).astype(np.int32)
+
+
+def _add_floor_and_ceiling(m: _Mesh, v: np.ndarray) -> None:
+    """The flat floor and ceiling inside the fillets as fans (concentric rings) of the field's outline."""
+    ring = [(x, y) for x, y, *_ in (r[0] for r in [[p] for p in _outline_ring_points()])]
+    ring = np.array(ring)
+    n_rings = max(1, math.ceil(float(np.hypot(ring[:, 0], ring[:, 1]).max()) / MESH_MAX_EDGE))
+    for z, inset in ((0.0, 0), (HEIGHT, 1)):
+        pts = np.array(_outline_ring_points(ceiling=bool(inset)))
+        centre = m.v((0.0, 0.0, z))
+        rings = [[m.v((x * s, y * s, z)) for x, y in pts] for s in np.arange(1, n_rings + 1) / n_rings]
+        nr = len(pts)
+        for i in range(nr):
+            m.tris.append((centre, rings[0][i], rings[0][(i + 1) % nr]))
+            for r0, r1 in zip(rings[:-1], rings[1:]):
+                m.tris.append((r0[i], r1[i], r1[(i + 1) % nr]))
+                m.tris.append((r0[i], r1[(i + 1) % nr], r0[(i + 1) % nr]))
+    for sy in (1.0, -1.0):  # the goal floors, flat part
+        ring = [(x, sy * y, 0.0) for x, y in ((-(GW - NET_R), PIECE_START_Y), (GW - NET_R, PIECE_START_Y),
+                                             (GW - NET_R, RISE_Y), (-(GW - NET_R), RISE_Y))]
+        m.fan(ring)
+
+
+def _outline_ring_points(ceiling: bool = False) -> list[tuple[float, float]]:
+    """Where the floor (or the ceiling) meets its fillets, round the whole outline."""
+    rows = _field_rows(1)
+    k = -1 if ceiling else 0
+    return [(row[k][0], row[k][1]) for row in rows]
+
+
+def _keep_surface(v: np.ndarray, t: np.ndarray, with_floor_and_ceiling: bool) -> np.ndarray:
+    """Drop degenerate triangles, those inside another piece, and (without floor and ceiling) the flat ones at
+    z = 0 and z = height; wind the rest to face the interior."""
+    a, b, c = v[t[:, 0]], v[t[:, 1]], v[t[:, 2]]
+    normal = np.cross(b - a, c - a)
+    area = np.linalg.norm(normal, axis=1)
+    keep = area > 1e-6
+    centroid = (a + b + c) / 3.0
+    keep &= np.abs(game_arena_sdf_many(centroid)) < 1.0  # a triangle inside another piece is off the surface
+    if not with_floor_and_ceiling:
+        flat = np.all(np.abs(np.stack([a[:, 2], b[:, 2], c[:, 2]], 1)) < 1e-6, axis=1)
+        flat |= np.all(np.abs(np.stack([a[:, 2], b[:, 2], c[:, 2]], 1) - HEIGHT) < 1e-6, axis=1)
+        keep &= ~flat
+    t, normal, area, centroid = t[keep], normal[keep], area[keep], centroid[keep]
+    unit = normal / area[:, None]
+    flip = game_arena_sdf_many(centroid + 0.5 * unit) < game_arena_sdf_many(centroid - 0.5 * unit)
+    t = t.copy()
+    t[flip] = t[flip][:, [0, 2, 1]]
+    return t
