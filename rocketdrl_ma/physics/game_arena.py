@@ -51,7 +51,7 @@ class GameArenaDimensions:
     post_floor_fillet: float = 96.0    # back walls to the floor, |x| <= back_fillet_taper_start_x
     back_fillet_taper_start_x: float = 1000.0
     back_fillet_taper_end_x: float = 1300.0
-    ceiling_fillet: float = 520.0      # every wall to the ceiling
+    ceiling_fillet: float = 516.0      # every wall to the ceiling
     goal_half_width: float = 896.0     # the net's side walls |x| =
     goal_height: float = 640.0         # the roof behind the crossbar
     frame_bevel: float = 8.0           # posts and crossbar: 45 degree bevels from the back wall onto the net
@@ -364,7 +364,7 @@ def game_surface_contacts(x, y, z, reach, out):
     sy = 1.0 if y >= 0.0 else -1.0
     ax, ay = abs(x), abs(y)
     # the post's bevel: from (MOUTH_W, back_y) to (GW, back_y + BEVEL) in (|x|, |y|), between the roundings
-    t = min(max(((MOUTH_W - ax) - (ay - BACK_Y)) * 0.5 / BEVEL, 0.0), 1.0)
+    t = min(max(((MOUTH_W - ax) + (ay - BACK_Y)) * 0.5 / BEVEL, 0.0), 1.0)
     qz = min(max(z, NET_R), GH - NET_R)
     n = _add_point(out, n, x, y, z, sx * (MOUTH_W - t * BEVEL), sy * (BACK_Y + t * BEVEL), qz, reach)
     # the crossbar's bevel: from (back_y, MOUTH_H) to (back_y + BEVEL, GH) in (|y|, z)

