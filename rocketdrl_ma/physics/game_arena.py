@@ -51,7 +51,10 @@ class GameArenaDimensions:
     post_floor_fillet: float = 96.0    # back walls to the floor, |x| <= back_fillet_taper_start_x
     back_fillet_taper_start_x: float = 1000.0
     back_fillet_taper_end_x: float = 1300.0
-    ceiling_fillet: float = 516.0      # every wall to the ceiling
+    ceiling_fillet: float = 512.0      # every wall to the ceiling
+    # The fillets are polygons (their vertices on the circle): the vertices' angles from the wall's tangent point
+    # to the floor's or ceiling's, the same on every wall and both fillets.
+    fillet_vertex_angles_deg: tuple[float, ...] = (0.0, 11.6, 22.9, 34.0, 45.0, 56.0, 67.1, 78.4, 90.0)
     goal_half_width: float = 896.0     # the net's side walls |x| =
     goal_height: float = 640.0         # the roof behind the crossbar
     frame_bevel: float = 8.0           # posts and crossbar: 45 degree bevels from the back wall onto the net
@@ -76,6 +79,10 @@ C2X, C2Y = _D.corner_back_rounding_centre
 RF_SIDE, RF_BACK, RF_POST = _D.floor_fillet, _D.back_floor_fillet, _D.post_floor_fillet
 TAPER_X0, TAPER_X1 = _D.back_fillet_taper_start_x, _D.back_fillet_taper_end_x
 RC = _D.ceiling_fillet
+_ANG = np.radians(np.array(_D.fillet_vertex_angles_deg))
+CHORD_COS_MID = np.cos(0.5 * (_ANG[1:] + _ANG[:-1]))  # each chord's normal, from the fillet's centre outwards
+CHORD_SIN_MID = np.sin(0.5 * (_ANG[1:] + _ANG[:-1]))
+CHORD_COS_HALF = np.cos(0.5 * (_ANG[1:] - _ANG[:-1]))  # the chord's distance from the centre, per unit radius
 GW, GH, BEVEL = _D.goal_half_width, _D.goal_height, _D.frame_bevel
 MOUTH_W = GW + BEVEL                       # the opening at the back wall
 MOUTH_H = GH + BEVEL
@@ -167,6 +174,23 @@ def _inside_others(ax, ay, which):
     return d
 
 
+@njit(cache=True, inline="always")
+def _polygon_fillet(a, b, r):
+    """Inside distance in a fillet's corner (a from the wall, b from the floor or ceiling, both < r) to the wall,
+    the floor and the fillet's chords (a convex polygon: the nearest of their lines inside it), and its gradient
+    (along a, along b)."""
+    if a <= b:
+        d, ga, gb = a, 1.0, 0.0
+    else:
+        d, ga, gb = b, 0.0, 1.0
+    u, v = r - a, r - b  # from the fillet's centre towards the wall and towards the floor
+    for k in range(CHORD_COS_MID.shape[0]):
+        f = r * CHORD_COS_HALF[k] - (u * CHORD_COS_MID[k] + v * CHORD_SIN_MID[k])
+        if f < d:
+            d, ga, gb = f, CHORD_COS_MID[k], CHORD_SIN_MID[k]
+    return d, ga, gb
+
+
 @njit(cache=True)
 def _field(x, y, z):
     """Signed distance to the field (positive inside) and its unit gradient (into the field)."""
@@ -177,18 +201,12 @@ def _field(x, y, z):
     rf = _floor_fillet(piece, ax, t)
     a = -s  # inside distance from the wall
     if a < rf and z < rf:  # the floor fillet
-        u, v = rf - a, rf - z
-        L = math.sqrt(u * u + v * v)
-        if L > 1e-12:
-            return rf - L, -sx * ox * u / L, -sy * oy * u / L, v / L
-        return rf, 0.0, 0.0, 1.0
+        d, ga, gb = _polygon_fillet(a, z, rf)
+        return d, -sx * ox * ga, -sy * oy * ga, gb
     c = HEIGHT - z
     if a < RC and c < RC:  # the ceiling fillet
-        u, v = RC - a, RC - c
-        L = math.sqrt(u * u + v * v)
-        if L > 1e-12:
-            return RC - L, -sx * ox * u / L, -sy * oy * u / L, -v / L
-        return RC, 0.0, 0.0, -1.0
+        d, ga, gb = _polygon_fillet(a, c, RC)
+        return d, -sx * ox * ga, -sy * oy * ga, -gb
     if a <= z and a <= c:
         return a, -sx * ox, -sy * oy, 0.0
     if z <= c:
@@ -418,13 +436,13 @@ def _quadrant_outline() -> list[tuple[float, float, float, float, int, float]]:
     return out
 
 
-def _field_profile(rf: float, segments: int) -> list[tuple[float, float]]:
-    """(inside distance from the wall a, z) from the floor's edge up the fillet, the wall and the ceiling fillet."""
-    floor = [(rf - rf * math.cos(th), rf - rf * math.sin(th)) for th in np.linspace(0.5 * math.pi, 0.0, segments + 1)]
+def _field_profile(rf: float) -> list[tuple[float, float]]:
+    """(inside distance from the wall a, z) from the floor's edge up the fillet's polygon, the wall and the ceiling
+    fillet's polygon."""
+    floor = [(rf - rf * math.cos(th), rf - rf * math.sin(th)) for th in _ANG[::-1]]
     wall = [(0.0, z) for z in (MOUTH_H, *np.linspace(rf, HEIGHT - RC, 4)[1:-1]) if rf < z < HEIGHT - RC]
     wall.sort(key=lambda p: p[1])
-    ceiling = [(RC - RC * math.cos(th), HEIGHT - RC + RC * math.sin(th)) for th in np.linspace(0.0, 0.5 * math.pi,
-                                                                                             segments + 1)]
+    ceiling = [(RC - RC * math.cos(th), HEIGHT - RC + RC * math.sin(th)) for th in _ANG]
     return floor + wall + ceiling
 
 
@@ -453,7 +471,7 @@ class _Mesh:
             self.tris.append((c, a, b))
 
 
-def _field_rows(segments: int) -> list[list[tuple[float, float, float]]]:
+def _field_rows() -> list[list[tuple[float, float, float]]]:
     quadrant = _quadrant_outline()
     ring = []
     for sx, sy, rev in ((1.0, 1.0, False), (-1.0, 1.0, True), (-1.0, -1.0, False), (1.0, -1.0, True)):
@@ -462,7 +480,7 @@ def _field_rows(segments: int) -> list[list[tuple[float, float, float]]]:
     rows = []
     for x, y, nx, ny, piece, t in ring:
         rf = _floor_fillet(piece, abs(x), t)
-        rows.append([(x - a * nx, y - a * ny, z) for a, z in _field_profile(rf, segments)])
+        rows.append([(x - a * nx, y - a * ny, z) for a, z in _field_profile(rf)])
     return rows
 
 
@@ -524,7 +542,7 @@ def game_arena_mesh(segments: int = 8, with_floor_and_ceiling: bool = True) -> t
     if segments < 1:
         raise ValueError(f"segments: must be >= 1, got {segments!r}")
     m = _Mesh()
-    m.grid(_field_rows(segments), closed=True)
+    m.grid(_field_rows(), closed=True)
     for sy in (1.0, -1.0):
         m.grid(_mouth_rows(sy, segments))
         rows, sides = _net_rows(sy, segments)
@@ -564,7 +582,7 @@ def _add_floor_and_ceiling(m: _Mesh, v: np.ndarray) -> None:
 
 def _outline_ring_points(ceiling: bool = False) -> list[tuple[float, float]]:
     """Where the floor (or the ceiling) meets its fillets, round the whole outline."""
-    rows = _field_rows(1)
+    rows = _field_rows()
     k = -1 if ceiling else 0
     return [(row[k][0], row[k][1]) for row in rows]
 
