@@ -83,6 +83,9 @@ _ANG = np.radians(np.array(_D.fillet_vertex_angles_deg))
 CHORD_COS_MID = np.cos(0.5 * (_ANG[1:] + _ANG[:-1]))  # each chord's normal, from the fillet's centre outwards
 CHORD_SIN_MID = np.sin(0.5 * (_ANG[1:] + _ANG[:-1]))
 CHORD_COS_HALF = np.cos(0.5 * (_ANG[1:] - _ANG[:-1]))  # the chord's distance from the centre, per unit radius
+VERTEX_A = 1.0 - np.cos(_ANG)  # the polygon's vertices per unit radius: from the wall, from the floor
+VERTEX_B = 1.0 - np.sin(_ANG)
+CHORD_MID = 0.5 * (_ANG[1:] + _ANG[:-1])  # the angle of each chord's normal in (from the wall, from the floor)
 GW, GH, BEVEL = _D.goal_half_width, _D.goal_height, _D.frame_bevel
 MOUTH_W = GW + BEVEL                       # the opening at the back wall
 MOUTH_H = GH + BEVEL
@@ -363,16 +366,104 @@ def _add_point(out, n, x, y, z, qx, qy, qz, reach):
 
 
 @njit(cache=True)
+def _in_a_goal_piece(qx, qy, qz):
+    """Whether a point of the field's surface lies inside a goal piece (the opening cut into the back wall)."""
+    if abs(qy) <= PIECE_START_Y:
+        return False
+    return _net(qx, qy, qz)[0] > 1e-3 or _mouth(qx, qy, qz)[0] > 1e-3
+
+
+@njit(cache=True)
+def _add_field_point(out, n, x, y, z, qx, qy, qz, reach):
+    """A point q of the field's surface as a contact (normal from q to the centre) if within reach and real."""
+    dx, dy, dz = x - qx, y - qy, z - qz
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if d <= 1e-9 or d > reach or _in_a_goal_piece(qx, qy, qz):
+        return n
+    return _add(out, n, d, dx / d, dy / d, dz / d)
+
+
+@njit(cache=True)
+def _fillet_contacts(out, n, a, b, r, wall_is_a_plane, wx, wy, zs, reach):
+    """The faces and edges of one fillet's polygon within reach of a centre at (a from the wall, b from the floor
+    or ceiling), as Bullet's sphere-triangle test with RocketSim's internal-edge adjustment gives them: a chord's
+    nearest point with its normal, and at an edge between two faces (chords, or the first chord and a mesh wall)
+    the direction to the centre clamped between the two faces' normals. The mesh runs the outer chords on past
+    the floor or ceiling plane and past a side wall's plane, so those ends have no edge. (wx, wy, zs): the 3D
+    directions of a and b's growth."""
+    n_chords = CHORD_MID.shape[0]
+    for c in range(n_chords):
+        a0, b0 = r * VERTEX_A[c], r * VERTEX_B[c]
+        ea, eb = r * VERTEX_A[c + 1] - a0, r * VERTEX_B[c + 1] - b0
+        u = ((a - a0) * ea + (b - b0) * eb) / (ea * ea + eb * eb)
+        lo = -_FAR if (c == 0 and wall_is_a_plane) else 0.0
+        hi = _FAR if c == n_chords - 1 else 1.0
+        if lo <= u <= hi:  # the face
+            da, db = a - (a0 + u * ea), b - (b0 + u * eb)
+            d = math.sqrt(da * da + db * db)
+            if d <= reach:
+                ca, cb = math.cos(CHORD_MID[c]), math.sin(CHORD_MID[c])
+                n = _add(out, n, d, ca * wx, ca * wy, cb * zs)
+    for j in range(0 if not wall_is_a_plane else 1, n_chords):  # the edges between faces
+        da, db = a - r * VERTEX_A[j], b - r * VERTEX_B[j]
+        d = math.sqrt(da * da + db * db)
+        if d > reach or d <= 1e-9:
+            continue
+        phi = math.atan2(db, da)
+        phi = min(max(phi, CHORD_MID[j - 1] if j > 0 else 0.0), CHORD_MID[j])
+        ca, cb = math.cos(phi), math.sin(phi)
+        n = _add(out, n, d, ca * wx, ca * wy, cb * zs)
+    return n
+
+
+@njit(cache=True)
+def _field_contacts(x, y, z, reach, out, n):
+    """The field's faces within reach, as a triangle mesh plus RocketSim's planes gives them (each face its own
+    nearest point, hidden or not): the floor, ceiling and side-wall planes, each chord of the fillets' polygons,
+    the wall between the fillets and, elsewhere, the field's nearest point (the vertical roundings)."""
+    sx = 1.0 if x >= 0.0 else -1.0
+    sy = 1.0 if y >= 0.0 else -1.0
+    ax, ay = abs(x), abs(y)
+    if z <= reach:
+        n = _add_field_point(out, n, x, y, z, x, y, 0.0, reach)
+    if HEIGHT - z <= reach:
+        n = _add_field_point(out, n, x, y, z, x, y, HEIGHT, reach)
+    if SIDE_X - ax <= reach:
+        n = _add_field_point(out, n, x, y, z, sx * SIDE_X, y, z, reach)
+    s, ox, oy, piece, t = _outline(ax, ay)
+    a = -s
+    if a > reach + RC:
+        return n
+    rf = _floor_fillet(piece, ax, t)
+    in_fillet = False
+    for k in range(2):  # the floor's fillet, then the ceiling's
+        r = rf if k == 0 else RC
+        b = z if k == 0 else HEIGHT - z
+        if a >= r + reach or b >= r + reach:
+            continue
+        in_fillet = in_fillet or (a < r and b < r)
+        zs = 1.0 if k == 0 else -1.0
+        n = _fillet_contacts(out, n, a, b, r, piece == 0, -sx * ox, -sy * oy, zs, reach)
+    if piece != 0 and 0.0 <= a <= reach and rf <= z <= HEIGHT - RC:  # a mesh wall between the fillets
+        n = _add_field_point(out, n, x, y, z, sx * (ax - s * ox), sy * (ay - s * oy), z, reach)
+    if not in_fillet:
+        d, nx, ny, nz = _field(x, y, z)
+        if d <= reach and not _in_a_goal_piece(x - nx * d, y - ny * d, z - nz * d):
+            n = _add(out, n, d, nx, ny, nz)
+    return n
+
+
+@njit(cache=True)
 def game_surface_contacts(x, y, z, reach, out):
     """Where a sphere at (x, y, z) reaching ``reach`` uu meets the game arena: rows (distance, nx, ny, nz) of
     ``out`` (normals into the arena), one per surface it reaches. Returns the number of rows.
 
-    Each piece's nearest point counts if no other piece covers it; near a goal the bevels of the posts and the
-    crossbar are added as strips (their nearest point, which is an edge when the centre is off the strip), as a
-    triangle mesh would give them."""
-    n = 0
+    The field's faces count as RocketSim's meshes and planes give them (``_field_contacts``); near a goal each goal
+    piece's nearest point counts if no other piece covers it, and the bevels of the posts and the crossbar are
+    added as strips (their nearest point, which is an edge when the centre is off the strip)."""
+    n = _field_contacts(x, y, z, reach, out, 0)
     near_goal = abs(y) > PIECE_START_Y - reach and abs(x) < MOUTH_W + RF_BACK + reach and z < MOUTH_H + reach
-    for k in range(3 if near_goal else 1):
+    for k in range(1, 3 if near_goal else 1):
         d, nx, ny, nz = _piece(k, x, y, z)
         if d <= reach and _on_surface(x - nx * d, y - ny * d, z - nz * d, k):
             n = _add(out, n, d, nx, ny, nz)
