@@ -253,9 +253,6 @@ def _net_section(ay, z):
         f = BACK_R - L
         if f < d and L > 1e-12:
             d, gy, gz = f, -u / L, -v / L
-    f = ay - PIECE_START_Y  # the front, inside the field
-    if f < d:
-        d, gy, gz = f, 1.0, 0.0
     return d, gy, gz
 
 
@@ -265,7 +262,11 @@ def _net(x, y, z):
     sx = 1.0 if x >= 0.0 else -1.0
     sy = 1.0 if y >= 0.0 else -1.0
     b, gy, gz = _net_section(abs(y), z)
-    return _round_join(GW - abs(x), (-sx, 0.0, 0.0), b, (0.0, sy * gy, gz), NET_R)
+    d, nx, ny, nz = _round_join(GW - abs(x), (-sx, 0.0, 0.0), b, (0.0, sy * gy, gz), NET_R)
+    f = abs(y) - PIECE_START_Y  # the front, inside the field (not rounded)
+    if f < d:
+        return f, 0.0, sy, 0.0
+    return d, nx, ny, nz
 
 
 @njit(cache=True)
@@ -288,13 +289,14 @@ def _mouth(x, y, z):
     f = (MOUTH_H + BACK_Y - z - ay) * SQRT_HALF
     if f < b:
         b, gby, gbz = f, -sy * SQRT_HALF, -SQRT_HALF
-    f = ay - PIECE_START_Y
-    if f < b:
-        b, gby, gbz = f, sy, 0.0
+    d, nx, ny, nz = _round_join(a, (gax, gay, 0.0), b, (0.0, gby, gbz), NET_R)
+    f = ay - PIECE_START_Y  # the front and the back (where the net takes over) are not rounded
+    if f < d:
+        d, nx, ny, nz = f, 0.0, sy, 0.0
     f = BACK_Y + BEVEL + 1.0 - ay
-    if f < b:
-        b, gby, gbz = f, -sy, 0.0
-    return _round_join(a, (gax, gay, 0.0), b, (0.0, gby, gbz), NET_R)
+    if f < d:
+        d, nx, ny, nz = f, 0.0, -sy, 0.0
+    return d, nx, ny, nz
 
 
 @njit(cache=True)
@@ -472,15 +474,40 @@ def game_surface_contacts(x, y, z, reach, out):
     sx = 1.0 if x >= 0.0 else -1.0
     sy = 1.0 if y >= 0.0 else -1.0
     ax, ay = abs(x), abs(y)
-    # the post's bevel: from (MOUTH_W, back_y) to (GW, back_y + BEVEL) in (|x|, |y|), between the roundings
-    t = min(max(((MOUTH_W - ax) + (ay - BACK_Y)) * 0.5 / BEVEL, 0.0), 1.0)
-    qz = min(max(z, NET_R), GH - NET_R)
-    n = _add_point(out, n, x, y, z, sx * (MOUTH_W - t * BEVEL), sy * (BACK_Y + t * BEVEL), qz, reach)
-    # the crossbar's bevel: from (back_y, MOUTH_H) to (back_y + BEVEL, GH) in (|y|, z)
-    t = min(max(((MOUTH_H - z) + (ay - BACK_Y)) * 0.5 / BEVEL, 0.0), 1.0)
-    qx = min(max(x, -(GW - NET_R)), GW - NET_R)
-    n = _add_point(out, n, x, y, z, qx, sy * (BACK_Y + t * BEVEL), MOUTH_H - t * BEVEL, reach)
+    # The post: in (|x|, |y|) the back wall (normal at 270 degrees), its edge at (MOUTH_W, back_y), the bevel
+    # (225), its edge at (GW, back_y + BEVEL) and the net's side (180); along z between the roundings.
+    if NET_R <= z <= GH - NET_R:
+        t = ((MOUTH_W - ax) + (ay - BACK_Y)) * 0.5 / BEVEL
+        if 0.0 < t < 1.0:  # the bevel's face
+            n = _add_point(out, n, x, y, z, sx * (MOUTH_W - t * BEVEL), sy * (BACK_Y + t * BEVEL), z, reach)
+        for ex, ey, lo, hi in ((MOUTH_W, BACK_Y, 1.25, 1.5), (GW, BACK_Y + BEVEL, 1.0, 1.25)):
+            n = _frame_edge(out, n, ax - ex, ay - ey, lo, hi, sx, 0.0, 0.0, 0.0, sy, 0.0, reach)
+    # The crossbar: in (|y|, z) the back wall (180 degrees), its edge at (back_y, MOUTH_H), the bevel (225), its
+    # edge at (back_y + BEVEL, GH) and the net's roof (270); along x between the roundings.
+    if abs(x) <= GW - NET_R:
+        t = ((MOUTH_H - z) + (ay - BACK_Y)) * 0.5 / BEVEL
+        if 0.0 < t < 1.0:
+            n = _add_point(out, n, x, y, z, x, sy * (BACK_Y + t * BEVEL), MOUTH_H - t * BEVEL, reach)
+        for ey, ez, lo, hi in ((BACK_Y, MOUTH_H, 1.0, 1.25), (BACK_Y + BEVEL, GH, 1.25, 1.5)):
+            n = _frame_edge(out, n, ay - ey, z - ez, lo, hi, 0.0, sy, 0.0, 0.0, 0.0, 1.0, reach)
     return n
+
+
+@njit(cache=True)
+def _frame_edge(out, n, du, dv, lo, hi, ux, uy, uz, vx, vy, vz, reach):
+    """An edge of the goal frame seen from a centre at (du, dv) from it in the frame's section, as Bullet with
+    RocketSim's internal-edge adjustment gives it: the direction to the centre, clamped between the normals of the
+    two faces that meet there (angles lo..hi in half turns). The section's axes u and v are (ux, uy, uz) and
+    (vx, vy, vz) in 3D."""
+    d = math.sqrt(du * du + dv * dv)
+    if d > reach or d <= 1e-9:
+        return n
+    phi = math.atan2(dv, du) / math.pi
+    if phi < 0.0:
+        phi += 2.0
+    phi = min(max(phi, lo), hi) * math.pi
+    cu, cv = math.cos(phi), math.sin(phi)
+    return _add(out, n, d, cu * ux + cv * vx, cu * uy + cv * vy, cu * uz + cv * vz)
 
 
 # ================================================================= ray casts

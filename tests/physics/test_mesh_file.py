@@ -199,11 +199,15 @@ def test_the_game_arena_measures_as_the_game(mesh_folder):
 
 
 def test_the_game_shape_is_within_a_few_uu_of_the_meshes(table):
-    """The game shape (``arena_shape="game"``) against the meshes. Issue 49's target is p99.9 <= 2 uu and max
-    <= 5 uu; reached on 2026-11-28 (100,000 points): p99.9 2.80, max 6.69 (the post's foot), so this asserts the
-    reached 3 and 7 uu, and the target on the flat walls, corners and net."""
+    """The game shape (``arena_shape="game"``) against the meshes: issue 49's target (p99.9 <= 2 uu, max <= 5 uu)
+    overall and on every family but two. Not reached (2026-11-28, 100,000 points): the floor fillets' p99.9 2.5
+    (where the corner-to-back rounding's fillet shrinks from 256 to 160) and the goal frame's max 6.7 (the posts'
+    feet); those two are held to what they reached."""
     sample, _, _ = table
     rows = {r.family: r for r in distance_table(sample, "game")}
-    assert rows["all"].abs_percentiles[3] <= 3.0 and rows["all"].abs_max <= 7.0
-    for family in ("walls below 400 uu", "walls above 400 uu", "corners", "goal interior"):
+    assert rows["all"].abs_percentiles[3] <= 2.0 and rows["all"].abs_max <= 7.0
+    for family in ("floor", "walls below 400 uu", "walls above 400 uu", "corners", "wall-ceiling fillet", "ceiling",
+                   "goal interior"):
         assert rows[family].abs_percentiles[3] <= 2.0 and rows[family].abs_max <= 5.0, family
+    assert rows["floor-wall fillet"].abs_percentiles[3] <= 3.0 and rows["floor-wall fillet"].abs_max <= 3.0
+    assert rows["goal mouth, posts, crossbar"].abs_percentiles[3] <= 4.0

@@ -54,9 +54,9 @@ GAME_SHAPE_SCENES = {
 
 
 _NOT_YET = {  # measured 2026-11-28 (docs/experiments/arena-mesh.md, "the game shape")
-    "side wall at z = 250": "contact on the fillet's top: 14.7 deg off",
-    "crossbar at z = 640": "the crossbar's bevel and rounding: 32.5 deg off",
-    "post at x = 900": "the post's bevel edge: RocketSim (-509, -763), ours (-50, -872)",
+    "crossbar at z = 640": "RocketSim (0, -664, -646), ours (0, -856, -177): the game's 45 degree turn is not "
+                           "explained by the bevel's edges",
+    "post at x = 900": "RocketSim (-509, -763, 0), ours (-89, -869, 0): as the crossbar",
 }
 
 
