@@ -47,10 +47,16 @@ class GameArenaDimensions:
     corner_back_rounding: float = 852.09
     corner_back_rounding_centre: tuple[float, float] = (2593.8, 4264.6)
     floor_fillet: float = 256.0        # side and corner walls to the floor
-    back_floor_fillet: float = 160.0   # back walls to the floor, |x| >= back_fillet_taper_end_x
-    post_floor_fillet: float = 96.0    # back walls to the floor, |x| <= back_fillet_taper_start_x
-    back_fillet_taper_start_x: float = 1000.0
-    back_fillet_taper_end_x: float = 1300.0
+    back_floor_fillet: float = 160.0   # back walls to the floor, away from the posts
+    post_floor_fillet: float = 96.0    # back walls to the floor beside the posts
+    # The floor fillet's radius where it changes, read off the meshes' vertices (linear between them): round the
+    # corner-to-back rounding by the angle (degrees) about its centre, and along the back wall by |x|.
+    corner_back_floor_fillet: tuple[tuple[float, float], ...] = (
+        (44.7, 256.0), (50.8, 251.6), (56.7, 240.6), (62.6, 225.3), (68.4, 208.0), (74.3, 190.8), (80.2, 175.4),
+        (86.1, 160.0))
+    back_floor_fillet_by_x: tuple[tuple[float, float], ...] = (
+        (960.0, 96.0), (1024.0, 100.6), (1088.0, 112.5), (1152.0, 127.8), (1216.0, 143.2), (1280.0, 155.1),
+        (1344.0, 160.0))
     ceiling_fillet: float = 512.0      # every wall to the ceiling
     # The fillets are polygons (their vertices on the circle): the vertices' angles from the wall's tangent point
     # to the floor's or ceiling's, the same on every wall and both fillets.
@@ -77,7 +83,10 @@ SQRT_HALF = math.sqrt(0.5)
 C1X, C1Y = _D.side_corner_rounding_centre
 C2X, C2Y = _D.corner_back_rounding_centre
 RF_SIDE, RF_BACK, RF_POST = _D.floor_fillet, _D.back_floor_fillet, _D.post_floor_fillet
-TAPER_X0, TAPER_X1 = _D.back_fillet_taper_start_x, _D.back_fillet_taper_end_x
+CORNER_TAPER_DEG = np.array([p[0] for p in _D.corner_back_floor_fillet])
+CORNER_TAPER_R = np.array([p[1] for p in _D.corner_back_floor_fillet])
+BACK_TAPER_X = np.array([p[0] for p in _D.back_floor_fillet_by_x])
+BACK_TAPER_R = np.array([p[1] for p in _D.back_floor_fillet_by_x])
 RC = _D.ceiling_fillet
 _ANG = np.radians(np.array(_D.fillet_vertex_angles_deg))
 CHORD_COS_MID = np.cos(0.5 * (_ANG[1:] + _ANG[:-1]))  # each chord's normal, from the fillet's centre outwards
@@ -118,15 +127,9 @@ def _floor_fillet(piece, ax, t):
     3 corner rounding, 4 back) at parameter t (the rounding's angle share, or |x| on the back wall)."""
     if piece <= 2:
         return RF_SIDE
-    if piece == 3:  # 256 to 160 round the corner-to-back rounding (measured: between linear and smoothstep)
-        s = min(max(t, 0.0), 1.0)
-        w = 0.5 * (s + s * s * (3.0 - 2.0 * s))
-        return RF_SIDE + (RF_BACK - RF_SIDE) * w
-    if ax >= TAPER_X1:
-        return RF_BACK
-    if ax <= TAPER_X0:
-        return RF_POST
-    return RF_POST + (RF_BACK - RF_POST) * (ax - TAPER_X0) / (TAPER_X1 - TAPER_X0)
+    if piece == 3:  # 256 to 160 round the corner-to-back rounding
+        return np.interp(45.0 + 45.0 * t, CORNER_TAPER_DEG, CORNER_TAPER_R)
+    return np.interp(ax, BACK_TAPER_X, BACK_TAPER_R)  # 160 tapering to 96 beside the posts
 
 
 @njit(cache=True)
@@ -546,8 +549,8 @@ def _quadrant_outline() -> list[tuple[float, float, float, float, int, float]]:
     for a in np.linspace(0.25 * math.pi, 0.5 * math.pi, ROUNDING_SEGMENTS + 1):
         out.append((C2X + R2 * math.cos(a), C2Y + R2 * math.sin(a), math.cos(a), math.sin(a), 3,
                     (a - 0.25 * math.pi) / (0.25 * math.pi)))
-    xs = sorted({0.0, MOUTH_W, TAPER_X0, TAPER_X1, *np.linspace(TAPER_X0, TAPER_X1, 7).tolist(),
-                 *np.linspace(0.0, MOUTH_W, 5).tolist(), *np.linspace(TAPER_X1, C2X, 5).tolist()}, reverse=True)
+    xs = sorted({0.0, MOUTH_W, *BACK_TAPER_X.tolist(), *np.linspace(0.0, MOUTH_W, 5).tolist(),
+                 *np.linspace(BACK_TAPER_X[-1], C2X, 5).tolist()}, reverse=True)
     for x in xs:
         if x < C2X - 1e-6:
             out.append((float(x), BACK_Y, 0.0, 1.0, 4, 0.0))

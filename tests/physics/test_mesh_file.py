@@ -200,14 +200,17 @@ def test_the_game_arena_measures_as_the_game(mesh_folder):
 
 def test_the_game_shape_is_within_a_few_uu_of_the_meshes(table):
     """The game shape (``arena_shape="game"``) against the meshes: issue 49's target (p99.9 <= 2 uu, max <= 5 uu)
-    overall and on every family but two. Not reached (2026-11-28, 100,000 points): the floor fillets' p99.9 2.5
-    (where the corner-to-back rounding's fillet shrinks from 256 to 160) and the goal frame's max 6.7 (the posts'
-    feet); those two are held to what they reached."""
+    overall and on every family but two (2026-11-28): the goal frame, whose worst points (the posts' feet, where the
+    net's floor rounding blends into the back wall's fillet) reached p99.9 3.5 and max 6.7, and the floor fillets,
+    p99.9 1.6 on the benchmark's 100,000 points but 2.1 on this test's 20,000 (the seam where the corner's mesh
+    overlaps the back wall's); both are held to what they reached."""
     sample, _, _ = table
     rows = {r.family: r for r in distance_table(sample, "game")}
     assert rows["all"].abs_percentiles[3] <= 2.0 and rows["all"].abs_max <= 7.0
-    for family in ("floor", "walls below 400 uu", "walls above 400 uu", "corners", "wall-ceiling fillet", "ceiling",
-                   "goal interior"):
-        assert rows[family].abs_percentiles[3] <= 2.0 and rows[family].abs_max <= 5.0, family
-    assert rows["floor-wall fillet"].abs_percentiles[3] <= 3.0 and rows["floor-wall fillet"].abs_max <= 3.0
-    assert rows["goal mouth, posts, crossbar"].abs_percentiles[3] <= 4.0
+    for family in FAMILIES:
+        if family not in ("goal mouth, posts, crossbar", "floor-wall fillet"):
+            assert rows[family].abs_percentiles[3] <= 2.0 and rows[family].abs_max <= 5.0, family
+    fillet = rows["floor-wall fillet"]
+    assert fillet.abs_percentiles[3] <= 2.5 and fillet.abs_max <= 5.0
+    frame = rows["goal mouth, posts, crossbar"]
+    assert frame.abs_percentiles[2] <= 2.0 and frame.abs_percentiles[3] <= 4.0 and frame.abs_max <= 7.0
