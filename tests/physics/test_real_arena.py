@@ -50,13 +50,18 @@ GAME_SHAPE_SCENES = {
     "crossbar at z = 640": BallScene(pos=(0.0, 4500.0, 640.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE,
                                      gravity_z=0.0),
     "post at x = 900": BallScene(pos=(900.0, 4500.0, 300.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE, gravity_z=0.0),
+    # the same, 6 and 8 uu further on: the first contact tick finds the ball 2 to 4 uu less deep
+    "crossbar at z = 640, shallow first contact": BallScene(pos=(128.0, 4506.0, 640.0), vel=(0.0, 1500.0, 0.0),
+                                                            ticks=TICK_RATE, gravity_z=0.0),
+    "post at x = 900, shallow first contact": BallScene(pos=(900.0, 4508.0, 300.0), vel=(0.0, 1500.0, 0.0),
+                                                        ticks=TICK_RATE, gravity_z=0.0),
 }
 
 
 _NOT_YET = {  # measured 2026-11-28 (docs/experiments/arena-mesh.md, "the game shape")
-    "crossbar at z = 640": "RocketSim (0, -664, -646), ours (0, -856, -177): the game's 45 degree turn is not "
-                           "explained by the bevel's edges",
-    "post at x = 900": "RocketSim (-509, -763, 0), ours (-89, -869, 0): as the crossbar",
+    "crossbar at z = 640": "RocketSim (0, -664, -646), ours (0, -856, -177): RocketSim turns the ball 44 to 57 "
+                           "degrees when its first contact tick finds it 3 uu or more deep, 11 degrees when less",
+    "post at x = 900": "RocketSim (-509, -763, 0), ours (-89, -869, 0): as the crossbar (34 to 54 degrees, or 5.5)",
 }
 
 
