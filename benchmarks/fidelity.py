@@ -106,9 +106,9 @@ def print_arena_mesh_tables(n_mesh_points: int, seed: int, arena_shape: str = "c
               "(pip install --no-deps rlgym-rocket-league==2.0.1).")
         return
     sample = sample_game_surface(folder, n_mesh_points, seed)
-    print(f"Signed distance (uu) from our {arena_shape!r} arena to the game's ({n_mesh_points} points on RocketSim's soccar meshes "
-          f"and {int((~sample.from_mesh).sum())} on its planes, uniform by area, seed {seed}; + where the game's "
-          f"surface lies in our playable space):")
+    print(f"Signed distance (uu) from our {arena_shape!r} arena to the game's ({n_mesh_points} points on RocketSim's "
+          f"soccar meshes and {int((~sample.from_mesh).sum())} on its planes, uniform by area, seed {seed}; + where "
+          f"the game's surface lies in our playable space):")
     print()
     print(format_table(distance_table(sample, arena_shape)))
     print()

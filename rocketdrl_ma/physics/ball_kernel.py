@@ -182,10 +182,10 @@ def ball_tick(shape, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot,
               car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z, tick, dt,
               touched, touch_point, touch_normal, extra_vel, car_push):
     """One tick of every arena's ball (see the module docstring) in an arena of ``shape`` (``arena_shape``'s
-    integer, compiled per value: call ``ball_tick_classic`` or ``ball_tick_game``); writes the ball arrays in place and changes the
-    velocities of the cars that touch a ball. Per car it reports ``touched`` (this tick), the contact point on the
-    ball and the normal, the extra push it gave (``extra_vel``, zero if none) and ``car_push``, the position change
-    of the overlap correction.
+    integer, compiled per value: call ``ball_tick_classic`` or ``ball_tick_game``); writes the ball arrays in
+    place and changes the velocities of the cars that touch a ball. Per car it reports ``touched`` (this tick), the
+    contact point on the ball and the normal, the extra push it gave (``extra_vel``, zero if none) and
+    ``car_push``, the position change of the overlap correction.
 
     ``car_vel`` holds the cars' velocities before this tick's gravity (PyBullet adds it during its step); the solve
     adds it and takes it off again. Returns the number of touching cars."""

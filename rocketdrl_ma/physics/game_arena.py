@@ -16,12 +16,15 @@ shape; ``arena_geometry`` is the ``"classic"`` one (one 400 uu fillet everywhere
   a half cylinder of radius 240 at the back, the roof flat then sloping down onto it), the edges where the slab
   meets the section rounded by 96.
 
+The fillets are the meshes' polygons (8 chords, vertices on the circle at ``fillet_vertex_angles_deg``), not
+circles.
+
 **Distance.** Each piece's inside distance is exact or nearly (the floor fillet's radius varies slowly along the
-outline); the union is their maximum, a lower bound near the seams. ``game_surface_contacts`` checks each piece's
-nearest point against the others (a point inside another piece is not surface) and adds the post and crossbar
-edges, as ``arena_geometry.surface_contacts`` does. ``game_arena_raycast`` sphere-traces the union (its distance is
-a lower bound, so no step overshoots). ``game_arena_mesh`` sweeps the same profiles and drops the triangles that
-lie inside another piece.
+outline); the union is their maximum, a lower bound near the seams. ``game_surface_contacts`` gives the contacts
+RocketSim's ball gets from the meshes and planes (each face's nearest point, and at an edge between two faces
+the direction to the centre clamped between their normals, as Bullet's internal-edge utility does);
+``game_arena_raycast`` sphere-traces the union (its distance is a lower bound, so no step overshoots);
+``game_arena_mesh`` sweeps the same polygons and drops the triangles that lie inside another piece.
 """
 from __future__ import annotations
 
@@ -78,7 +81,6 @@ GAME_ARENA = GameArenaDimensions()
 _D = GAME_ARENA
 SIDE_X, BACK_Y, CORNER_SUM, HEIGHT = _D.side_x, _D.back_y, _D.corner_sum, _D.height
 R1, R2 = _D.side_corner_rounding, _D.corner_back_rounding
-SQRT2 = math.sqrt(2.0)
 SQRT_HALF = math.sqrt(0.5)
 C1X, C1Y = _D.side_corner_rounding_centre
 C2X, C2Y = _D.corner_back_rounding_centre
@@ -142,14 +144,14 @@ def _outline(ax, ay):
         L = math.sqrt(ux * ux + uy * uy)
         if L > 1e-9:
             out_d = L - R1
-            if out_d >= 0.0 or -out_d < _inside_others(ax, ay, 1):
+            if out_d >= 0.0 or -out_d < _inside_others(ax, ay):
                 return out_d, ux / L, uy / L, 1, math.atan2(uy, ux) / (0.25 * math.pi)
     vx, vy = ax - C2X, ay - C2Y
     if vx >= 0.0 and vy >= vx:  # corner-to-back rounding
         L = math.sqrt(vx * vx + vy * vy)
         if L > 1e-9:
             out_d = L - R2
-            if out_d >= 0.0 or -out_d < _inside_others(ax, ay, 3):
+            if out_d >= 0.0 or -out_d < _inside_others(ax, ay):
                 return out_d, vx / L, vy / L, 3, (math.atan2(vy, vx) - 0.25 * math.pi) / (0.25 * math.pi)
     # the flat walls: the nearest of the three lines whose segment the point projects onto
     e_side = ax - SIDE_X
@@ -168,7 +170,7 @@ def _outline(ax, ay):
 
 
 @njit(cache=True, inline="always")
-def _inside_others(ax, ay, which):
+def _inside_others(ax, ay):
     """Inside distance to the flat walls (a point in a rounding's wedge may still be nearer a wall inside)."""
     d = _FAR
     if ay <= C1Y:
@@ -246,8 +248,7 @@ def _net_section(ay, z):
     f = GH - z  # roof
     if f < d:
         d, gy, gz = f, 0.0, -1.0
-    f = ROOF_C - (ROOF_NY * ay + ROOF_NZ * z)  # sloping roof (its normal points out of the net)
-    f = -f
+    f = ROOF_NY * ay + ROOF_NZ * z - ROOF_C  # sloping roof
     if f < d:
         d, gy, gz = f, ROOF_NY, ROOF_NZ
     u, v = ay - BACK_CY, z - BACK_CZ
@@ -670,23 +671,20 @@ def game_arena_mesh(segments: int = 8, with_floor_and_ceiling: bool = True) -> t
         m.grid(rows)
         for ring in sides:
             m.fan(ring)
-    v = np.array(m.verts)
-    t = np.array(m.tris, dtype=np.int64)
     if with_floor_and_ceiling:
-        _add_floor_and_ceiling(m, v)
-        v, t = np.array(m.verts), np.array(m.tris, dtype=np.int64)
+        _add_floor_and_ceiling(m)
+    v, t = np.array(m.verts), np.array(m.tris, dtype=np.int64)
     t = _keep_surface(v, t, with_floor_and_ceiling)
     used, t = np.unique(t, return_inverse=True)
     return v[used], t.reshape(-1, 3).astype(np.int32)
 
 
-def _add_floor_and_ceiling(m: _Mesh, v: np.ndarray) -> None:
-    """The flat floor and ceiling inside the fillets as fans (concentric rings) of the field's outline."""
-    ring = [(x, y) for x, y, *_ in (r[0] for r in [[p] for p in _outline_ring_points()])]
-    ring = np.array(ring)
-    n_rings = max(1, math.ceil(float(np.hypot(ring[:, 0], ring[:, 1]).max()) / MESH_MAX_EDGE))
-    for z, inset in ((0.0, 0), (HEIGHT, 1)):
-        pts = np.array(_outline_ring_points(ceiling=bool(inset)))
+def _add_floor_and_ceiling(m: _Mesh) -> None:
+    """The flat floor and ceiling inside the fillets as concentric rings of the outline where they meet the
+    fillets, and the flat part of the nets' floors."""
+    for z, ceiling in ((0.0, False), (HEIGHT, True)):
+        pts = np.array(_outline_ring_points(ceiling))
+        n_rings = max(1, math.ceil(float(np.hypot(pts[:, 0], pts[:, 1]).max()) / MESH_MAX_EDGE))
         centre = m.v((0.0, 0.0, z))
         rings = [[m.v((x * s, y * s, z)) for x, y in pts] for s in np.arange(1, n_rings + 1) / n_rings]
         nr = len(pts)
@@ -701,7 +699,7 @@ def _add_floor_and_ceiling(m: _Mesh, v: np.ndarray) -> None:
         m.fan(ring)
 
 
-def _outline_ring_points(ceiling: bool = False) -> list[tuple[float, float]]:
+def _outline_ring_points(ceiling: bool) -> list[tuple[float, float]]:
     """Where the floor (or the ceiling) meets its fillets, round the whole outline."""
     rows = _field_rows()
     k = -1 if ceiling else 0

@@ -65,8 +65,9 @@ def post_tick_kernels(car_pos, car_vel, car_ang_vel, car_arena, car_active, cs, 
 @functools.lru_cache(maxsize=None)
 def _arena_mesh_lists(arena_shape: str) -> tuple[list, list]:
     """The arena's walls, goals and ramps as the nested lists (m; indices) ``createCollisionShape`` takes, made once
-    per process and shape: PyBullet keeps a reference to every vertex row it is given and never lets go of it, so fresh lists
-    for every world leaked about 1.45 MB each (about 320 MB over a league's 220 matches in one process)."""
+    per process and shape: PyBullet keeps a reference to every vertex row it is given and never lets go of it, so
+    fresh lists for every world leaked about 1.45 MB each (about 320 MB over a league's 220 matches in one
+    process)."""
     verts, idx = shape_mesh(arena_shape, with_floor_and_ceiling=False)  # the world's planes are floor and ceiling
     return (verts * M_PER_UU).tolist(), idx.reshape(-1).tolist()
 
