@@ -4,7 +4,7 @@ Its dimensions are ``GAME_ARENA`` (data, measured on RocketSim's soccar meshes b
 ``tests/physics/arena_mesh_profile.py``); this module only turns them into a surface. It is the ``"game"`` arena
 shape; ``arena_geometry`` is the ``"classic"`` one (one 400 uu fillet everywhere).
 
-**Pieces.** The playable space is the union of five convex-ish pieces:
+**Pieces.** The playable space is the union of these pieces:
 
 - the *field*: the octagon (side walls, back walls, 45 degree corner walls) whose vertical corners are rounded
   (``side_corner_rounding``, ``corner_back_rounding``), with a profile swept along that outline: a floor fillet
@@ -14,7 +14,9 @@ shape; ``arena_geometry`` is the ``"classic"`` one (one 400 uu fillet everywhere
   8 uu at 45 degrees onto the net's 896 x 640, its edges to the floor and roof rounded by 96;
 - per goal the *net*: the slab |x| <= 896 intersected with the net's y-z section (floor flat then rising 16 uu,
   a half cylinder of radius 240 at the back, the roof flat then sloping down onto it), the edges where the slab
-  meets the section rounded by 96.
+  meets the section rounded by 96;
+- per post its *foot*: the 96 uu floor fillet revolved round the post's vertical edge, where the back wall's
+  fillet turns into the net's.
 
 The fillets are the meshes' polygons (8 chords, vertices on the circle at ``fillet_vertex_angles_deg``), not
 circles.
@@ -304,6 +306,38 @@ def _mouth(x, y, z):
 
 
 @njit(cache=True)
+def _post_foot(x, y, z):
+    """Signed distance to the space round the foot of the post on (x, y)'s side (positive inside) and its
+    gradient: the post's floor fillet revolved round its vertical edge at (MOUTH_W, back_y + BEVEL), where the
+    post is a quarter cylinder of radius BEVEL, up to the fillet's top; between the back wall (facing -y) and the
+    net's side (facing -x)."""
+    sx = 1.0 if x >= 0.0 else -1.0
+    sy = 1.0 if y >= 0.0 else -1.0
+    u, v = MOUTH_W - abs(x), BACK_Y + BEVEL - abs(y)  # from the post's edge towards the goal and the field
+    if u <= 0.0 or v <= 0.0:  # outside the wedge: the nearer of its sides
+        if u <= v:
+            return u, -sx, 0.0, 0.0
+        return v, 0.0, -sy, 0.0
+    rho = math.sqrt(u * u + v * v)
+    ru, rv = -sx * u / rho, -sy * v / rho  # the gradient of rho
+    a = rho - BEVEL
+    if a < RF_POST and z < RF_POST:
+        d, ga, gb = _polygon_fillet(a, z, RF_POST)
+        d, gx, gy, gz = d, ga * ru, ga * rv, gb
+    elif a <= z:
+        d, gx, gy, gz = a, ru, rv, 0.0
+    else:
+        d, gx, gy, gz = z, 0.0, 0.0, 1.0
+    if RF_POST - z < d:  # the fillet's top (inside the field and the mouth)
+        d, gx, gy, gz = RF_POST - z, 0.0, 0.0, -1.0
+    if u < d:
+        d, gx, gy, gz = u, -sx, 0.0, 0.0
+    if v < d:
+        d, gx, gy, gz = v, 0.0, -sy, 0.0
+    return d, gx, gy, gz
+
+
+@njit(cache=True)
 def game_arena_sdf(x, y, z):
     """(d, nx, ny, nz): signed distance in uu (positive in the playable space) and the unit normal into it."""
     d, nx, ny, nz = _field(x, y, z)
@@ -312,6 +346,9 @@ def game_arena_sdf(x, y, z):
         if g > d:
             d, nx, ny, nz = g, gx, gy, gz
         g, gx, gy, gz = _mouth(x, y, z)
+        if g > d:
+            d, nx, ny, nz = g, gx, gy, gz
+        g, gx, gy, gz = _post_foot(x, y, z)
         if g > d:
             d, nx, ny, nz = g, gx, gy, gz
     return d, nx, ny, nz
@@ -337,13 +374,16 @@ def _piece(k, x, y, z):
         return _field(x, y, z)
     if k == 1:
         return _net(x, y, z)
-    return _mouth(x, y, z)
+    if k == 2:
+        return _mouth(x, y, z)
+    return _post_foot(x, y, z)
 
 
 @njit(cache=True)
 def _on_surface(qx, qy, qz, own):
-    """Whether a surface point of piece ``own`` (0 field, 1 net, 2 mouth; -1 an edge) lies inside no other piece."""
-    for k in range(3):
+    """Whether a surface point of piece ``own`` (0 field, 1 net, 2 mouth, 3 post foot; -1 an edge) lies inside no
+    other piece."""
+    for k in range(4):
         if k != own and (k == 0 or abs(qy) > PIECE_START_Y) and _piece(k, qx, qy, qz)[0] > 1e-3:
             return False
     return True
@@ -376,7 +416,7 @@ def _in_a_goal_piece(qx, qy, qz):
     """Whether a point of the field's surface lies inside a goal piece (the opening cut into the back wall)."""
     if abs(qy) <= PIECE_START_Y:
         return False
-    return _net(qx, qy, qz)[0] > 1e-3 or _mouth(qx, qy, qz)[0] > 1e-3
+    return _net(qx, qy, qz)[0] > 1e-3 or _mouth(qx, qy, qz)[0] > 1e-3 or _post_foot(qx, qy, qz)[0] > 1e-3
 
 
 @njit(cache=True)
@@ -469,7 +509,7 @@ def game_surface_contacts(x, y, z, reach, out):
     added as strips (their nearest point, which is an edge when the centre is off the strip)."""
     n = _field_contacts(x, y, z, reach, out, 0)
     near_goal = abs(y) > PIECE_START_Y - reach and abs(x) < MOUTH_W + RF_BACK + reach and z < MOUTH_H + reach
-    for k in range(1, 3 if near_goal else 1):
+    for k in range(1, 4 if near_goal else 1):
         d, nx, ny, nz = _piece(k, x, y, z)
         if d <= reach and _on_surface(x - nx * d, y - ny * d, z - nz * d, k):
             n = _add(out, n, d, nx, ny, nz)
@@ -617,7 +657,7 @@ def _rounded_section(w: float, lo: float, hi: float, segments: int) -> list[tupl
 
 
 def _mouth_rows(sy: float, segments: int) -> list[list[tuple[float, float, float]]]:
-    ys = [PIECE_START_Y, BACK_Y - RF_POST, *np.linspace(BACK_Y - RF_POST, BACK_Y, 5)[1:], BACK_Y + BEVEL]
+    ys = [BACK_Y, BACK_Y + BEVEL]  # the bevels (in front of the back wall the field and the posts' feet take over)
     rows = []
     for y in ys:
         w = min(MOUTH_W, MOUTH_W + BACK_Y - y)
@@ -657,6 +697,19 @@ def _net_rows(sy: float, segments: int) -> tuple[list[list[tuple[float, float, f
     return rows, sides
 
 
+def _post_foot_rows(sx: float, sy: float) -> list[list[tuple[float, float, float]]]:
+    """The post's foot: rows of the revolved fillet polygon from the back wall's side round to the net's."""
+    rows = []
+    for th in np.linspace(0.0, 0.5 * math.pi, ROUNDING_SEGMENTS + 1):
+        row = []
+        for al in _ANG:
+            rho = BEVEL + RF_POST * (1.0 - math.cos(al))
+            u, v = rho * math.sin(th), rho * math.cos(th)
+            row.append((sx * (MOUTH_W - u), sy * (BACK_Y + BEVEL - v), RF_POST * (1.0 - math.sin(al))))
+        rows.append(row)
+    return rows
+
+
 def game_arena_mesh(segments: int = 8, with_floor_and_ceiling: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """The interior boundary as (vertices (N, 3) float64 uu, triangles (M, 3) int32), wound so the right-hand
     normals face the interior; every vertex lies on ``game_arena_sdf``'s zero level. Without the floor and ceiling
@@ -671,6 +724,8 @@ def game_arena_mesh(segments: int = 8, with_floor_and_ceiling: bool = True) -> t
         m.grid(rows)
         for ring in sides:
             m.fan(ring)
+        for sx in (1.0, -1.0):
+            m.grid(_post_foot_rows(sx, sy))
     if with_floor_and_ceiling:
         _add_floor_and_ceiling(m)
     v, t = np.array(m.verts), np.array(m.tris, dtype=np.int64)
@@ -714,7 +769,7 @@ def _keep_surface(v: np.ndarray, t: np.ndarray, with_floor_and_ceiling: bool) ->
     area = np.linalg.norm(normal, axis=1)
     keep = area > 1e-6
     centroid = (a + b + c) / 3.0
-    keep &= np.abs(game_arena_sdf_many(centroid)) < 1.0  # a triangle inside another piece is off the surface
+    keep &= np.abs(game_arena_sdf_many(centroid)) < 0.5  # a triangle inside another piece is off the surface
     if not with_floor_and_ceiling:
         flat = np.all(np.abs(np.stack([a[:, 2], b[:, 2], c[:, 2]], 1)) < 1e-6, axis=1)
         flat |= np.all(np.abs(np.stack([a[:, 2], b[:, 2], c[:, 2]], 1) - HEIGHT) < 1e-6, axis=1)
