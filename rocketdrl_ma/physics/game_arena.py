@@ -1,7 +1,7 @@
 """The game-shaped soccar arena: Rocket League's collision surface as analytic pieces (uu, z up).
 
-Its dimensions are ``GAME_ARENA`` (data, measured on RocketSim's soccar meshes by
-``tests/physics/arena_mesh_profile.py``); this module only turns them into a surface. It is the ``"game"`` arena
+Its dimensions are ``GAME_ARENA`` (data, measured on RocketSim's soccar meshes: see ``GameArenaDimensions``); this
+module only turns them into a surface. It is the ``"game"`` arena
 shape; ``arena_geometry`` is the ``"classic"`` one (one 400 uu fillet everywhere).
 
 **Pieces.** The playable space is the union of these pieces:
@@ -39,8 +39,9 @@ from numba import njit
 
 @dataclass(frozen=True)
 class GameArenaDimensions:
-    """Rocket League's soccar arena in uu, from circle fits to cross-sections of RocketSim's collision meshes
-    (``tests/physics/arena_mesh_profile.py``; the fits are listed in docs/experiments/arena-mesh.md)."""
+    """Rocket League's soccar arena in uu, measured on RocketSim's collision meshes: circle fits to cross-sections
+    (``tests/physics/arena_mesh_profile.py``) and the meshes' vertices (docs/experiments/arena-mesh.md, "the game
+    shape", lists both)."""
     side_x: float = 4096.0             # side walls |x| =
     back_y: float = 5120.0             # back walls |y| =
     corner_sum: float = 8064.0         # corner walls |x| + |y| =
