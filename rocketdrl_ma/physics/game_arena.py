@@ -619,13 +619,23 @@ class _Mesh:
         return len(self.verts) - 1
 
     def grid(self, rows: list[list[tuple[float, float, float]]], closed: bool = False) -> None:
-        """Quads between consecutive rows of the same length (closed: the last row joins the first)."""
+        """Quads between consecutive rows of the same length (closed: the last row joins the first), each split
+        along the diagonal from the row nearer a mirror plane (x = 0 or y = 0), so that the mesh is as
+        mirror-symmetric as the arena (one diagonal everywhere pushed a car sideways where it met a fillet)."""
         ids = [[self.v(p) for p in row] for row in rows]
         pairs = list(zip(ids[:-1], ids[1:])) + ([(ids[-1], ids[0])] if closed else [])
         for r0, r1 in pairs:
             for k in range(len(r0) - 1):
-                self.tris.append((r0[k], r1[k], r1[k + 1]))
-                self.tris.append((r0[k], r1[k + 1], r0[k + 1]))
+                if self._off_mirror(r0[k]) <= self._off_mirror(r1[k]):
+                    self.tris.append((r0[k], r1[k], r1[k + 1]))
+                    self.tris.append((r0[k], r1[k + 1], r0[k + 1]))
+                else:
+                    self.tris.append((r0[k], r1[k], r0[k + 1]))
+                    self.tris.append((r1[k], r1[k + 1], r0[k + 1]))
+
+    def _off_mirror(self, i: int) -> float:
+        x, y, _ = self.verts[i]
+        return min(abs(x), abs(y)) + 1e-6 * (abs(x) + abs(y))
 
     def fan(self, ring: list[tuple[float, float, float]]) -> None:
         c = self.v(np.mean(np.array(ring), axis=0))
