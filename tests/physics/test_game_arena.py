@@ -1,5 +1,7 @@
 """The game-shaped arena (``arena_shape="game"``, ``physics/game_arena.py``): its distance field, contacts, ray casts
 and Bullet mesh agree with each other, and the option selects it without touching the classic arena."""
+import copy
+
 import numpy as np
 import pybullet as pb
 import pytest
@@ -156,3 +158,20 @@ def test_the_classic_shape_is_untouched():
     """The classic arena's distance is ``arena_geometry``'s (the game shape is a separate module)."""
     assert arena_sdf(2000.0, 5000.0, 100.0)[0] < game_arena_sdf(2000.0, 5000.0, 100.0)[0] - 10.0
     assert arena_sdf(3900.0, 0.0, 100.0)[0] == pytest.approx(-(np.hypot(3900.0 - 3696.0, 100.0 - 400.0) - 400.0))
+
+
+def test_a_copy_of_a_game_shaped_arena_keeps_its_shape():
+    arena = physics.Arena(arena_shape="game")
+    try:
+        arena.ball.set_state(physics.BallState(pos=np.array([3500.0, 0.0, 250.0]), vel=np.array([1500.0, 0.0, 0.0])))
+        twin = copy.deepcopy(arena)
+        try:
+            assert twin.batch.arena_shape == "game"
+            arena.step(60)
+            twin.step(60)
+            assert np.array_equal(arena.ball.get_state().vel, twin.ball.get_state().vel)
+            assert arena.ball.get_state().vel[2] > 100.0  # turned up by the top chord of the side wall's fillet
+        finally:
+            twin.close()
+    finally:
+        arena.close()
