@@ -9,7 +9,7 @@ speeds 6 ticks after the hit), then the signed distance from our analytic arena 
 (tests/physics/arena_mesh_profile.py), if rlgym-rocket-league's meshes are installed.
 
 Run from the repo root: ``python benchmarks/fidelity.py`` (``--rocketsim-only`` skips our engine,
-``--arena-mesh-only`` prints the two arena-mesh tables alone).
+``--arena-mesh-only`` prints the two arena-mesh tables alone, ``--arena-shape game`` measures the game shape).
 The scenario and adapter code lives in tests/physics/ (fidelity_scenarios.py, rocketsim_oracle.py) and is shared with
 tests/physics/test_fidelity.py.
 """
@@ -96,7 +96,7 @@ def print_contact_grids() -> None:
               f"5 %, same outcome |")
 
 
-def print_arena_mesh_tables(n_mesh_points: int, seed: int) -> None:
+def print_arena_mesh_tables(n_mesh_points: int, seed: int, arena_shape: str = "classic") -> None:
     from arena_mesh_distance import distance_table, format_table, sample_game_surface
     from arena_mesh_profile import format_measurements, measure_game_arena
     from rocketdrl_ma.physics.mesh_file import installed_rlgym_mesh_folder
@@ -106,11 +106,11 @@ def print_arena_mesh_tables(n_mesh_points: int, seed: int) -> None:
               "(pip install --no-deps rlgym-rocket-league==2.0.1).")
         return
     sample = sample_game_surface(folder, n_mesh_points, seed)
-    print(f"Signed distance (uu) from our arena to the game's ({n_mesh_points} points on RocketSim's soccar meshes "
-          f"and {int((~sample.from_mesh).sum())} on its planes, uniform by area, seed {seed}; + where the game's "
-          f"surface lies in our playable space):")
+    print(f"Signed distance (uu) from our {arena_shape!r} arena to the game's ({n_mesh_points} points on RocketSim's "
+          f"soccar meshes and {int((~sample.from_mesh).sum())} on its planes, uniform by area, seed {seed}; + where "
+          f"the game's surface lies in our playable space):")
     print()
-    print(format_table(distance_table(sample)))
+    print(format_table(distance_table(sample, arena_shape)))
     print()
     print("The game's arena measured on the meshes (circle fits to cross-sections) and ours:")
     print()
@@ -123,11 +123,13 @@ def main(argv=None) -> int:
     ap.add_argument("--arena-mesh-only", action="store_true", help="print only the arena-mesh tables")
     ap.add_argument("--mesh-points", type=int, default=100_000, help="points sampled on the game's meshes")
     ap.add_argument("--mesh-seed", type=int, default=0)
+    ap.add_argument("--arena-shape", choices=("classic", "game"), default="classic",
+                    help="our arena shape measured against the game's meshes")
     args = ap.parse_args(argv)
     if args.mesh_points < 1:
         ap.error(f"--mesh-points must be >= 1, got {args.mesh_points}")
     if args.arena_mesh_only:
-        print_arena_mesh_tables(args.mesh_points, args.mesh_seed)
+        print_arena_mesh_tables(args.mesh_points, args.mesh_seed, args.arena_shape)
         return 0
 
     init_rocketsim(tempfile.mkdtemp(prefix="rocketsim_dummy_meshes_"))
@@ -178,7 +180,7 @@ def main(argv=None) -> int:
         print()
         print_contact_grids()
         print()
-        print_arena_mesh_tables(args.mesh_points, args.mesh_seed)
+        print_arena_mesh_tables(args.mesh_points, args.mesh_seed, args.arena_shape)
 
     print()
     if ours_err:

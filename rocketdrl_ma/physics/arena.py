@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from . import constants as C
-from .arena_geometry import is_inside_arena
+from .arena_shape import DEFAULT_ARENA_SHAPE, shape_contains
 from .world import PhysicsWorld, _box_vector
 from .car_config import CarConfig
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_AUTOFLIP_SCALE, CS_AUTOFLIP_TIMER, CS_BOOST, CS_BOOSTING_TIME,
@@ -25,8 +25,8 @@ from .state import (BallHitInfo, BallState, BoostPadState, CarControls, CarExtra
                     yaw_rot_mat)
 
 
-def _check_inside(name: str, pos: np.ndarray, margin: float) -> None:
-    if not is_inside_arena(float(pos[0]), float(pos[1]), float(pos[2]), margin):
+def _check_inside(name: str, pos: np.ndarray, margin: float, arena_shape: str) -> None:
+    if not shape_contains(arena_shape, float(pos[0]), float(pos[1]), float(pos[2]), margin):
         raise ValueError(f"{name}: position {pos.tolist()} is outside the arena")
 
 
@@ -76,8 +76,8 @@ class Car:
     def set_state(self, state: CarState) -> None:
         if not isinstance(state, CarState):
             raise ValueError(f"state: expected CarState, got {type(state).__name__}")
-        _check_inside("pos", state.pos, 0.0)
         b = self._batch
+        _check_inside("pos", state.pos, 0.0, b.arena_shape)
         if state.is_demoed != bool(b.cs[self._k, CS_IS_DEMOED]):
             if state.is_demoed:
                 b.demolish(self.id)
@@ -165,7 +165,7 @@ class Ball:
     def set_state(self, state: BallState) -> None:
         if not isinstance(state, BallState):
             raise ValueError(f"state: expected BallState, got {type(state).__name__}")
-        _check_inside("pos", state.pos, 0.0)
+        _check_inside("pos", state.pos, 0.0, self._batch.arena_shape)
         self._batch.set_ball(self._arena, state.pos, state.vel, state.ang_vel)
 
     def get_pos(self) -> np.ndarray:
@@ -214,8 +214,9 @@ class BoostPad:
 class Arena:
     """One soccar arena: ``Arena(tick_rate=120)``, ``add_car``, ``step``, ``reset_kickoff`` (uu, z up)."""
 
-    def __init__(self, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
-        batch = PhysicsWorld(1, tick_rate=tick_rate, seed=seed)
+    def __init__(self, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None,
+                 arena_shape: str = DEFAULT_ARENA_SHAPE):
+        batch = PhysicsWorld(1, tick_rate=tick_rate, seed=seed, arena_shape=arena_shape)
         self._init_view(batch, 0)
         batch.attach_lone_arena(self)
 
@@ -320,14 +321,15 @@ class Arena:
         The centre of its top face must be inside the arena; the rest may reach into the floor (a low wall is
         a tall box sunk into it)."""
         half = _box_vector("half_extents", half_extents)
-        _check_inside("center + top half extent", _box_vector("center", center) + [0.0, 0.0, half[2]], 0.0)
+        _check_inside("center + top half extent", _box_vector("center", center) + [0.0, 0.0, half[2]], 0.0,
+                      self._batch.arena_shape)
         return self._batch.add_static_box(self.index, center, half)
 
     def move_static_box(self, box_id: int, center: np.ndarray) -> None:
         """Move a static box (between rounds: it teleports, it does not push what is in the way); as in
         ``add_static_box``, the centre of its top face must be inside the arena."""
         top = _box_vector("center", center) + [0.0, 0.0, self._batch.static_box_half_extents(box_id)[2]]
-        _check_inside("center + top half extent", top, 0.0)
+        _check_inside("center + top half extent", top, 0.0, self._batch.arena_shape)
         self._batch.move_static_box(box_id, center)
 
     def remove_static_box(self, box_id: int) -> None:

@@ -24,10 +24,10 @@ for everything):
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import literally, njit
 
 from . import constants as C
-from .arena_geometry import surface_contacts
+from .arena_shape import CLASSIC, GAME, shape_surface_contacts
 from .mutators import MUT_BALL_DRAG, MUT_BALL_HIT_EXTRA_SCALE, MUT_BALL_MAX_SPEED
 from .vec import mat_vec, vcross, vdot
 
@@ -178,16 +178,18 @@ def _friction_direction(n, rel):
 
 
 @njit(cache=True)
-def ball_tick(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena, car_live,
-              hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z, tick, dt,
+def ball_tick(shape, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
+              car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z, tick, dt,
               touched, touch_point, touch_normal, extra_vel, car_push):
-    """One tick of every arena's ball (see the module docstring); writes the ball arrays in place and changes the
-    velocities of the cars that touch a ball. Per car it reports ``touched`` (this tick), the contact point on the
-    ball and the normal, the extra push it gave (``extra_vel``, zero if none) and ``car_push``, the position change
-    of the overlap correction.
+    """One tick of every arena's ball (see the module docstring) in an arena of ``shape`` (``arena_shape``'s
+    integer, compiled per value: call ``ball_tick_classic`` or ``ball_tick_game``); writes the ball arrays in
+    place and changes the velocities of the cars that touch a ball. Per car it reports ``touched`` (this tick), the
+    contact point on the ball and the normal, the extra push it gave (``extra_vel``, zero if none) and
+    ``car_push``, the position change of the overlap correction.
 
     ``car_vel`` holds the cars' velocities before this tick's gravity (PyBullet adds it during its step); the solve
     adds it and takes it off again. Returns the number of touching cars."""
+    literally(shape)
     n_cars = car_pos.shape[0]
     n_touch = 0
     rows = np.zeros((n_cars + 10 + boxes.shape[0], _ROW))
@@ -243,8 +245,8 @@ def ball_tick(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_ve
             cache += extra
         # ---- the arena (and static boxes): one merged contact for the velocities, and each point's overlap
         merged = n_rows
-        n_points = surface_contacts(ball_pos[k, 0], ball_pos[k, 1], ball_pos[k, 2],
-                                    C.BALL_RADIUS + BALL_WORLD_CONTACT_GAP, surface)
+        n_points = shape_surface_contacts(shape, ball_pos[k, 0], ball_pos[k, 1], ball_pos[k, 2],
+                                          C.BALL_RADIUS + BALL_WORLD_CONTACT_GAP, surface)
         for c in range(n_points):
             _world_point(rows[merged + 1 + c], surface[c, 1:4], surface[c, 0] - C.BALL_RADIUS)
         for b in range(boxes.shape[0]):
@@ -292,6 +294,26 @@ def ball_tick(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_ve
         ball_vel[k] = vb
         ball_ang_vel[k] = wb
     return n_touch
+
+
+@njit(cache=True)
+def ball_tick_classic(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
+                      car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z,
+                      tick, dt, touched, touch_point, touch_normal, extra_vel, car_push):
+    """``ball_tick`` in the "classic" arena."""
+    return ball_tick(CLASSIC, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel,
+                     car_arena, car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes,
+                     mut, gravity_z, tick, dt, touched, touch_point, touch_normal, extra_vel, car_push)
+
+
+@njit(cache=True)
+def ball_tick_game(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
+                   car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z,
+                   tick, dt, touched, touch_point, touch_normal, extra_vel, car_push):
+    """``ball_tick`` in the "game" arena."""
+    return ball_tick(GAME, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel,
+                     car_arena, car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes,
+                     mut, gravity_z, tick, dt, touched, touch_point, touch_normal, extra_vel, car_push)
 
 
 @njit(cache=True)

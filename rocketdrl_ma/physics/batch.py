@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from . import constants as C
 from .arena import Arena
+from .arena_shape import DEFAULT_ARENA_SHAPE
 from .world import PhysicsWorld
 
 
@@ -14,6 +15,7 @@ class ArenaBatch(PhysicsWorld):
     handles every arena at once.
     """
 
-    def __init__(self, n_arenas: int = 1, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
-        super().__init__(n_arenas, tick_rate=tick_rate, seed=seed)
+    def __init__(self, n_arenas: int = 1, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None,
+                 arena_shape: str = DEFAULT_ARENA_SHAPE):
+        super().__init__(n_arenas, tick_rate=tick_rate, seed=seed, arena_shape=arena_shape)
         self._arena_views = [Arena._view(self, k) for k in range(n_arenas)]

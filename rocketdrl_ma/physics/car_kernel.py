@@ -12,10 +12,10 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import literally, njit
 
 from . import constants as C
-from .arena_geometry import arena_raycast
+from .arena_shape import CLASSIC, GAME, shape_raycast
 from .mutators import (MUT_BOOST_ACCEL_AIR, MUT_BOOST_ACCEL_GROUND, MUT_BOOST_PADS, MUT_BOOST_USED_PER_SECOND,
                        MUT_DODGE_DEADZONE, MUT_JUMP_ACCEL, MUT_JUMP_IMMEDIATE_VEL, MUT_PAD_COOLDOWN_BIG,
                        MUT_PAD_COOLDOWN_SMALL, MUT_UNLIMITED_DOUBLE_JUMPS, MUT_UNLIMITED_FLIPS)
@@ -187,9 +187,10 @@ class CarFrame(NamedTuple):
 
 
 @njit(cache=True)
-def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
+def car_pre_tick(shape, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
                  wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut, dt):
-    """Advance every active, non-demoed car's model by one tick: writes ``vel``/``ang_vel`` in place.
+    """Advance every active, non-demoed car's model by one tick in an arena of ``shape`` (``arena_shape``'s integer,
+    compiled per value: call ``car_pre_tick_classic`` or ``car_pre_tick_game``): writes ``vel``/``ang_vel`` in place.
 
     ``pos``/``vel``/``ang_vel`` are (N, 3), ``rot`` is (N, 3, 3) with columns forward/right/up,
     ``controls`` is (N, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake; ``mut`` holds each arena's
@@ -203,6 +204,7 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
 
     Returns how many cars' velocities must not be written back to PyBullet (inactive or demolished ones).
     """
+    literally(shape)
     # Scratch reused by every car: fresh small arrays per car and wheel were most of this kernel's time.
     frame = CarFrame(np.empty(3), np.empty(3), np.empty(3), np.empty(3))
     wheels = WheelContacts(np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_), np.zeros(4), np.zeros((4, 3)),
@@ -232,7 +234,7 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
         jump = c[5] > 0.5
         jump_pressed = jump and car[CS_LAST_JUMP] < 0.5
 
-        num_contact, num_world = _cast_wheel_rays(p, R, down, wheel_conn[i], wheel_ray_len[i],
+        num_contact, num_world = _cast_wheel_rays(shape, p, R, down, wheel_conn[i], wheel_ray_len[i],
                                                   ball_pos[car_arena[i]], ball_radius, wheels, car, scratch)
         on_ground = num_contact >= C.WHEELS_FOR_ON_GROUND
         _suspension_impulses(p, R, down, v0, w0, inv_inertia[i], wheel_rest[i], wheel_radius[i], wheel_ray_len[i],
@@ -260,8 +262,28 @@ def car_pre_tick(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel
     return n_unwritable
 
 
+@njit(cache=True)
+def car_pre_tick_classic(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
+                         wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs,
+                         mut, dt):
+    """``car_pre_tick`` in the "classic" arena."""
+    return car_pre_tick(CLASSIC, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius,
+                        wheel_ray_len, wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos,
+                        ball_radius, cs, mut, dt)
+
+
+@njit(cache=True)
+def car_pre_tick_game(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
+                      wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut,
+                      dt):
+    """``car_pre_tick`` in the "game" arena."""
+    return car_pre_tick(GAME, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
+                        wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs,
+                        mut, dt)
+
+
 @njit(cache=True, inline="always")
-def _cast_wheel_rays(p, R, down, conn, ray_len, ball_pos, ball_radius, wheels, car, scratch):
+def _cast_wheel_rays(shape, p, R, down, conn, ray_len, ball_pos, ball_radius, wheels, car, scratch):
     """Each wheel's ray from its hard point along car-down, against the arena (analytically) and this arena's
     ball; records the contacts in ``car``. Returns (wheels in contact, wheels on the arena)."""
     hit, hit_world, dist, normal, hard = wheels
@@ -276,7 +298,7 @@ def _cast_wheel_rays(p, R, down, conn, ray_len, ball_pos, ball_radius, wheels, c
         hp = hard[k]
         for j in range(3):
             hp[j] = p[j] + (R[j, 0] * c[0] + R[j, 1] * c[1] + R[j, 2] * c[2])
-        ok, t, nx, ny, nz = arena_raycast(hp[0], hp[1], hp[2], down[0], down[1], down[2], ray_len[k])
+        ok, t, nx, ny, nz = shape_raycast(shape, hp[0], hp[1], hp[2], down[0], down[1], down[2], ray_len[k])
         tb = _ray_sphere(hp, down, ball_pos, ball_radius)
         if tb >= 0.0 and tb <= ray_len[k] and (not ok or tb < t):
             for j in range(3):

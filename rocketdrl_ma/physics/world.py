@@ -23,14 +23,14 @@ import pybullet as pb
 from numba import njit
 
 from . import constants as C
-from .arena_geometry import arena_mesh
-from .ball_kernel import SPLIT_IMPULSE_ERP, ball_tick
+from .arena_shape import DEFAULT_ARENA_SHAPE, GAME, arena_shape_index, shape_mesh
+from .ball_kernel import SPLIT_IMPULSE_ERP, ball_tick_classic, ball_tick_game
 from .body_io import read_rows, unpack_rows
 from .car_config import CarConfig, get_preset
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER,
                          CS_HAS_DOUBLE_JUMPED, CS_HAS_FLIPPED, CS_HAS_JUMPED, CS_IS_DEMOED, CS_IS_SUPERSONIC,
-                         CS_ON_GROUND, CS_SIZE, boost_pad_tick, cancel_gyroscopic, car_post_tick, car_pre_tick,
-                         interp)
+                         CS_ON_GROUND, CS_SIZE, boost_pad_tick, cancel_gyroscopic, car_post_tick, car_pre_tick_classic,
+                         car_pre_tick_game, interp)
 from .events import BallTouch, BoostPickup, Bump, Demo, PhysicsEvent
 from .mutators import DemoMode, MutatorConfig
 from .state import BallHitInfo
@@ -62,12 +62,13 @@ def post_tick_kernels(car_pos, car_vel, car_ang_vel, car_arena, car_active, cs, 
     return respawn_due, n_picked
 
 
-@functools.lru_cache(maxsize=1)
-def _arena_mesh_lists() -> tuple[list, list]:
+@functools.lru_cache(maxsize=None)
+def _arena_mesh_lists(arena_shape: str) -> tuple[list, list]:
     """The arena's walls, goals and ramps as the nested lists (m; indices) ``createCollisionShape`` takes, made once
-    per process: PyBullet keeps a reference to every vertex row it is given and never lets go of it, so fresh lists
-    for every world leaked about 1.45 MB each (about 320 MB over a league's 220 matches in one process)."""
-    verts, idx = arena_mesh(with_floor_and_ceiling=False)  # the world's planes are the floor and ceiling
+    per process and shape: PyBullet keeps a reference to every vertex row it is given and never lets go of it, so
+    fresh lists for every world leaked about 1.45 MB each (about 320 MB over a league's 220 matches in one
+    process)."""
+    verts, idx = shape_mesh(arena_shape, with_floor_and_ceiling=False)  # the world's planes are floor and ceiling
     return (verts * M_PER_UU).tolist(), idx.reshape(-1).tolist()
 
 
@@ -143,11 +144,14 @@ class PhysicsWorld:
     ``Arena`` is the view of its own world of one); ``step(ticks)`` advances all.
     """
 
-    def __init__(self, n_arenas: int = 1, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None):
+    def __init__(self, n_arenas: int = 1, tick_rate: int = C.TICK_RATE_HZ, seed: int | None = None,
+                 arena_shape: str = DEFAULT_ARENA_SHAPE):
         if not isinstance(n_arenas, int) or n_arenas < 1:
             raise ValueError(f"n_arenas: must be an int >= 1, got {n_arenas!r}")
         if tick_rate != C.TICK_RATE_HZ:
             raise ValueError(f"tick_rate: only {C.TICK_RATE_HZ} Hz is supported (the game's rate), got {tick_rate!r}")
+        self._game_shape = arena_shape_index(arena_shape) == GAME  # which compiled kernels step() calls
+        self.arena_shape = arena_shape
         self.n_arenas = n_arenas
         self.tick_rate = tick_rate
         self.dt = 1.0 / tick_rate
@@ -305,7 +309,7 @@ class PhysicsWorld:
 
     def _build_static_world(self) -> None:
         cid = self.client
-        vertices, indices = _arena_mesh_lists()
+        vertices, indices = _arena_mesh_lists(self.arena_shape)
         shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, indices=indices,
                                         flags=pb.GEOM_FORCE_CONCAVE_TRIMESH, physicsClientId=cid)
         floor = pb.createCollisionShape(pb.GEOM_PLANE, planeNormal=[0, 0, 1], physicsClientId=cid)
@@ -481,6 +485,9 @@ class PhysicsWorld:
             raise ValueError(f"ticks: must be an int >= 0, got {ticks!r}")
         cid = self.client
         step_simulation = pb.stepSimulation
+        # the arena shape's kernels (each compiled for its shape alone: no branch on the shape inside them)
+        car_pre_tick = car_pre_tick_game if self._game_shape else car_pre_tick_classic
+        ball_tick = ball_tick_game if self._game_shape else ball_tick_classic
         for _ in range(ticks):
             self._read_state()
             if self._slots:

@@ -22,6 +22,7 @@ from numba import njit
 
 from rocketdrl_ma.physics.arena_geometry import arena_sdf_many
 from rocketdrl_ma.physics.constants import ARENA_EXTENT_X, ARENA_HEIGHT
+from rocketdrl_ma.physics.game_arena import game_arena_sdf_many
 from rocketdrl_ma.physics.mesh_file import read_soccar_arena
 
 GOAL_BACK_Y = 6000.0  # the back of the game's net; every mesh vertex has |y| <= 6000
@@ -217,9 +218,13 @@ def sample_game_surface(mesh_folder: str | Path, n_mesh_points: int, seed: int) 
     return SurfaceSample(points, normals, from_mesh, classify(points, normals))
 
 
-def distance_table(sample: SurfaceSample) -> list[FamilyRow]:
-    """One row per surface family that has points, in FAMILIES order, then "all"."""
-    signed = arena_sdf_many(sample.points)
+def distance_table(sample: SurfaceSample, arena_shape: str = "classic") -> list[FamilyRow]:
+    """One row per surface family that has points, in FAMILIES order, then "all", for the arena shape's distance
+    (``arena_sdf`` for "classic", ``game_arena_sdf`` for "game")."""
+    sdf_many = {"classic": arena_sdf_many, "game": game_arena_sdf_many}.get(arena_shape)
+    if sdf_many is None:
+        raise ValueError(f"arena_shape: must be 'classic' or 'game', got {arena_shape!r}")
+    signed = sdf_many(sample.points)
     rows = []
     for k, name in list(enumerate(FAMILIES)) + [(-1, "all")]:
         mask = sample.family == k if k >= 0 else np.ones(len(signed), dtype=bool)

@@ -196,3 +196,14 @@ def test_the_game_arena_measures_as_the_game(mesh_folder):
     for name, value in expected.items():
         assert game[name].game == pytest.approx(value, abs=3.0), name
         assert game[name].fit_residual < 2.0, name
+
+
+def test_the_game_shape_is_within_2_uu_of_the_meshes(table):
+    """The game shape (``arena_shape="game"``) against the meshes: issue 49's target, p99.9 <= 2 uu and max <= 5 uu
+    overall and on every surface family, but for the floor fillets' p99.9 on this test's smaller sample (the seam
+    where the corner's mesh overlaps the back wall's; docs/experiments/arena-mesh.md, the game shape)."""
+    sample, _, _ = table
+    rows = {r.family: r for r in distance_table(sample, "game")}
+    for family in (*FAMILIES, "all"):
+        p999 = 2.5 if family == "floor-wall fillet" else 2.0
+        assert rows[family].abs_percentiles[3] <= p999 and rows[family].abs_max <= 5.0, family

@@ -1,5 +1,6 @@
 """Our arena against RocketSim on the game's collision meshes (``rocketsim_mesh_oracle``), where the planes-only
-oracle of the other fidelity tests cannot look: the walls below the fillets' tops."""
+oracle of the other fidelity tests cannot look: the walls below the fillets' tops, the crossbar and the posts. The
+classic arena (the default) and the game shape (``arena_shape="game"``)."""
 import numpy as np
 import pytest
 
@@ -10,8 +11,8 @@ SPEED_TOLERANCE = 0.05  # issue 49's target: outgoing speed within 5 % and direc
 ANGLE_TOLERANCE_DEG = 2.0
 
 
-def _ours(scene: BallScene) -> np.ndarray:
-    arena = physics.Arena(tick_rate=TICK_RATE)
+def _ours(scene: BallScene, arena_shape: str = "classic") -> np.ndarray:
+    arena = physics.Arena(tick_rate=TICK_RATE, arena_shape=arena_shape)
     try:
         arena.set_mutator_config(physics.MutatorConfig(gravity_z_uu_s2=scene.gravity_z))
         arena.ball.set_state(physics.BallState(pos=np.array(scene.pos), vel=np.array(scene.vel),
@@ -34,6 +35,48 @@ def test_zero_g_ball_off_the_back_wall_below_the_fillet_top():
     (theirs,) = ball_trajectories_on_meshes([scene], folder)
     game, ours = theirs.vel[-1], _ours(scene)
     print(f"outgoing velocity after 1 s: RocketSim on the meshes {np.round(game, 1)}, ours {np.round(ours, 1)}")
+    cos = float(np.dot(game, ours) / (np.linalg.norm(game) * np.linalg.norm(ours)))
+    angle = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    speed_error = abs(np.linalg.norm(ours) / np.linalg.norm(game) - 1.0)
+    assert speed_error < SPEED_TOLERANCE and angle < ANGLE_TOLERANCE_DEG, (
+        f"RocketSim {np.round(game, 1)} vs ours {np.round(ours, 1)}: speed off {100 * speed_error:.1f} %, "
+        f"direction off {angle:.1f} deg")
+
+
+GAME_SHAPE_SCENES = {
+    "back wall at z = 200": BallScene(pos=(1500.0, 4500.0, 200.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE,
+                                      gravity_z=0.0),
+    "side wall at z = 250": BallScene(pos=(3500.0, 0.0, 250.0), vel=(1500.0, 0.0, 0.0), ticks=TICK_RATE,
+                                      gravity_z=0.0),
+    "crossbar at z = 640": BallScene(pos=(0.0, 4500.0, 640.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE,
+                                     gravity_z=0.0),
+    "post at x = 900": BallScene(pos=(900.0, 4500.0, 300.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE, gravity_z=0.0),
+    # the same, 6 and 8 uu further on: the first contact tick finds the ball 2 to 4 uu less deep
+    "crossbar at z = 640, shallow first contact": BallScene(pos=(128.0, 4506.0, 640.0), vel=(0.0, 1500.0, 0.0),
+                                                            ticks=TICK_RATE, gravity_z=0.0),
+    "post at x = 900, shallow first contact": BallScene(pos=(900.0, 4508.0, 300.0), vel=(0.0, 1500.0, 0.0),
+                                                        ticks=TICK_RATE, gravity_z=0.0),
+}
+
+
+_DEEP_FIRST_CONTACT = ("RocketSim turns the ball further off the frame when its first contact tick finds it deeper; "
+                       "ours gives the shallow answer (docs/experiments/arena-mesh.md, the game shape)")
+_NOT_YET = {"crossbar at z = 640": _DEEP_FIRST_CONTACT, "post at x = 900": _DEEP_FIRST_CONTACT}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=_NOT_YET[n]))
+                                  if n in _NOT_YET else n for n in GAME_SHAPE_SCENES])
+def test_zero_g_ball_off_the_game_shaped_arena(name):
+    """The game-shaped arena (``arena_shape="game"``) sends a zero-g ball off the walls below the fillets' tops,
+    the crossbar and a post as RocketSim on the meshes does."""
+    pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
+    folder = mesh_folder_or_none()
+    if folder is None:
+        pytest.skip("rlgym-rocket-league's collision meshes are not installed")
+    scene = GAME_SHAPE_SCENES[name]
+    (theirs,) = ball_trajectories_on_meshes([scene], folder)
+    game, ours = theirs.vel[-1], _ours(scene, "game")
+    print(f"{name}: RocketSim on the meshes {np.round(game, 1)}, ours {np.round(ours, 1)}")
     cos = float(np.dot(game, ours) / (np.linalg.norm(game) * np.linalg.norm(ours)))
     angle = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
     speed_error = abs(np.linalg.norm(ours) / np.linalg.norm(game) - 1.0)
