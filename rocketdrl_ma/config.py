@@ -15,6 +15,7 @@ from typing import Any
 import yaml
 
 from rocketdrl_ma.physics import PRESETS
+from rocketdrl_ma.physics.arena_shape import arena_shape_index
 from rocketdrl_ma.rules import GAME_MODES
 from rocketdrl_ma.rules.match import check_team_size
 from rocketdrl_ma.rules.rewards import check_weights
@@ -159,13 +160,15 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         value = raw.get(key, default)
         if value is inspect.Parameter.empty:
             raise ValueError(f"{key}: required for mode {mode!r}")
-        if key not in ("observation", "action", "rewards"):
+        if key not in ("observation", "action", "rewards", "arena_shape"):  # these four checked below
             _check_type(key, value, default)
         cfg[key] = value
     if "team_size" in cfg:  # the sides of a match, named as the config names them (not as the rules call them)
         for key in ("team_size", "blue_size", "orange_size"):
             if cfg.get(key) is not None:
                 check_team_size(key, cfg[key])
+    if "arena_shape" in cfg:
+        arena_shape_index(cfg["arena_shape"])  # a ValueError naming the field and the shapes
     if "car_preset" in cfg and cfg["car_preset"] not in PRESETS:
         raise ValueError(f"car_preset: unknown car preset {cfg['car_preset']!r}; allowed: {sorted(PRESETS)}")
     if not isinstance(cfg["tick_skip"], int) or cfg["tick_skip"] < 1:

@@ -243,7 +243,7 @@ class RocketDRLParallelEnv(ParallelEnv):
             return None
         if self._renderer is None:
             from .render import Renderer
-            self._renderer = Renderer()
+            self._renderer = Renderer(arena_shape=self.rules.arena_shape)
         frame = self._renderer.render(self._state)
         self._frames.append(frame)
         return frame

@@ -16,6 +16,7 @@ import numpy as np
 import pybullet as p
 
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE, arena_shape_index, shape_mesh
 from rocketdrl_ma.physics.car_config import PRESETS, CarConfig
 from rocketdrl_ma.rules.state import BLUE, ORANGE, GameState, agent_team
 
@@ -39,10 +40,9 @@ _HIDDEN_POS = (0.0, 0.0, -1000.0)  # metres: far below the floor, out of every c
 _IDENTITY_QUAT = (0.0, 0.0, 0.0, 1.0)
 
 
-def _arena_mesh() -> tuple[np.ndarray, np.ndarray]:
-    """The arena's surface mesh in uu (vertices (N, 3) float64, indices (M, 3) int32)."""
-    from rocketdrl_ma.physics.arena_geometry import arena_mesh
-    verts, idx = arena_mesh()
+def _arena_mesh(arena_shape: str) -> tuple[np.ndarray, np.ndarray]:
+    """The surface mesh of the arena of ``arena_shape`` in uu (vertices (N, 3) float64, indices (M, 3) int32)."""
+    verts, idx = shape_mesh(arena_shape)
     return np.asarray(verts, dtype=np.float64).reshape(-1, 3), np.asarray(idx, dtype=np.int64).reshape(-1, 3)
 
 
@@ -87,10 +87,11 @@ class Renderer:
     smoothly) or ``"top"`` (straight down on the whole field, blue goal on the left).
     ``fov_deg`` is the vertical field of view; ``smoothing_s`` the time constant of the camera's target in game
     seconds (0 = no smoothing). ``scoreboard`` overlays the score and clock when Pillow is installed.
+    ``arena_shape`` is the arena drawn (``physics.arena_shape.ARENA_SHAPES``; the env passes its game's).
     """
 
     def __init__(self, width: int = 640, height: int = 360, camera: str = "broadcast", *, fov_deg: float = 45.0,
-                 smoothing_s: float = 0.35, scoreboard: bool = True):
+                 smoothing_s: float = 0.35, scoreboard: bool = True, arena_shape: str = DEFAULT_ARENA_SHAPE):
         for name, v in (("width", width), ("height", height)):
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 8 <= v <= 4096:
                 raise ValueError(f"{name}: must be an integer in [8, 4096], got {v!r}")
@@ -100,6 +101,8 @@ class Renderer:
             raise ValueError(f"fov_deg: must be in [10, 150], got {fov_deg!r}")
         if not float(smoothing_s) >= 0.0:
             raise ValueError(f"smoothing_s: must be >= 0, got {smoothing_s!r}")
+        arena_shape_index(arena_shape)  # validates the name
+        self.arena_shape = arena_shape
         self.width, self.height, self.camera = int(width), int(height), camera
         self.fov_deg, self.smoothing_s, self.scoreboard = float(fov_deg), float(smoothing_s), bool(scoreboard)
         self._client = p.connect(p.DIRECT)
@@ -127,9 +130,9 @@ class Renderer:
 
     def _build_static(self) -> None:
         cid = self._client
-        # arena_mesh winds every triangle to face the inside. TinyRenderer culls back faces, so a camera outside
+        # shape_mesh winds every triangle to face the inside. TinyRenderer culls back faces, so a camera outside
         # the arena sees through the near wall and the ceiling, as a broadcast camera does.
-        verts, idx = _arena_mesh()
+        verts, idx = _arena_mesh(self.arena_shape)
         # The flat floor gets the pitch colour, the rest (ramps, walls, ceiling, goals) grey: two bodies, no overdraw.
         tri = verts[idx]
         normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])

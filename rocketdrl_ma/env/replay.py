@@ -33,6 +33,7 @@ from typing import Iterator
 import numpy as np
 
 from rocketdrl_ma.physics import BallState, CarConfig, CarControls, CarState
+from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE
 from rocketdrl_ma.physics.car_config import WheelPair
 from rocketdrl_ma.rules.events import events_from_dicts
 from rocketdrl_ma.rules.state import GameState, Obstacle
@@ -220,6 +221,10 @@ class Replay:
         self.meta: dict = json.loads(str(arrays["meta_json"]))
         self.agents: list[str] = [str(a) for a in arrays["agents"]]
         self._configs = [_config_from_json(str(t)) for t in arrays["car_configs_json"]]
+        config = self.meta.get("config")
+        # the recorded game's arena (an env's recording carries its config; other recordings are classic)
+        self.arena_shape: str = (config.get("arena_shape", DEFAULT_ARENA_SHAPE) if isinstance(config, dict)
+                                 else DEFAULT_ARENA_SHAPE)
 
     def __len__(self) -> int:
         return int(self._a["tick"].shape[0])
@@ -292,7 +297,7 @@ class Replay:
             score=(int(a["score"][i, 0]), int(a["score"][i, 1])), clock_s=float(a["clock_s"][i]),
             is_overtime=bool(a["is_overtime"][i]), kickoff_pending=bool(a["kickoff_pending"][i]),
             last_touch=touch or None, obstacles=obstacles, events=events_from_dicts(json.loads(str(a["events_json"][i]))),
-            car_configs=configs)
+            car_configs=configs, arena_shape=self.arena_shape)
 
 
 def load_replay(path: str) -> Replay:
@@ -329,7 +334,7 @@ def render_replay(path: str, out_path: str, fps: float | None = None, width: int
         fps = replay.states_per_second() or 30.0
     if not math.isfinite(float(fps)) or float(fps) <= 0.0:
         raise ValueError(f"fps: must be a positive number, got {fps!r}")
-    renderer = Renderer(width, height, camera, **renderer_kwargs)
+    renderer = Renderer(width, height, camera, **{"arena_shape": replay.arena_shape, **renderer_kwargs})
     try:
         with VideoWriter(out_path, fps) as video:
             for state in replay:

@@ -44,8 +44,8 @@ class VectorEnv:
             raise ValueError(f"n_arenas: must be an int >= 1, got {n_arenas!r}")
         self.n_arenas = n_arenas
         self.autoreset = autoreset
-        self.batch = ArenaBatch(n_arenas)
         self.lanes = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_arenas)]
+        self.batch = ArenaBatch(n_arenas, arena_shape=self.lanes[0].rules.arena_shape)
         for k, lane in enumerate(self.lanes):
             # A partial of a bound method, not a lambda: the env pickles (copies share nothing with the original)
             lane.rules.arena_factory = functools.partial(self._hand_out_arena, k)

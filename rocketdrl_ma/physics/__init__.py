@@ -33,13 +33,14 @@ _drop_stale_kernel_caches()
 from . import compile_notice  # noqa: F401  (before any kernel runs: the first compile of a process says so)
 from .arena import Arena, Ball, BoostPad, Car
 from .batch import ArenaBatch
+from .arena_shape import ARENA_SHAPES, DEFAULT_ARENA_SHAPE
 from .car_config import PRESETS, CarConfig, get_preset
 from .events import BallTouch, BoostPickup, Bump, CarHit, Demo, PhysicsEvent, PhysicsEventKind
 from .mutators import DemoMode, MutatorConfig
 from .state import BallHitInfo, BallState, BoostPadState, CarControls, CarExtraState, CarState, yaw_rot_mat
 from .world import BatchArrays, PhysicsWorld
 
-__all__ = ["Arena", "ArenaBatch", "Ball", "BallHitInfo", "BallState", "BallTouch", "BatchArrays", "BoostPad",
-           "BoostPadState", "BoostPickup", "Bump", "Car", "CarConfig", "CarControls", "CarExtraState", "CarHit",
-           "CarState", "Demo", "DemoMode", "MutatorConfig", "PRESETS", "PhysicsEvent", "PhysicsEventKind",
-           "PhysicsWorld", "get_preset", "yaw_rot_mat"]
+__all__ = ["ARENA_SHAPES", "Arena", "ArenaBatch", "Ball", "BallHitInfo", "BallState", "BallTouch", "BatchArrays",
+           "BoostPad", "BoostPadState", "BoostPickup", "Bump", "Car", "CarConfig", "CarControls", "CarExtraState",
+           "CarHit", "CarState", "DEFAULT_ARENA_SHAPE", "Demo", "DemoMode", "MutatorConfig", "PRESETS",
+           "PhysicsEvent", "PhysicsEventKind", "PhysicsWorld", "get_preset", "yaw_rot_mat"]

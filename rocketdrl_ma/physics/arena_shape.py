@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .arena_geometry import arena_mesh, arena_raycast, is_inside_arena, surface_contacts
+from .arena_geometry import arena_distance, arena_mesh, arena_raycast, is_inside_arena, surface_contacts
 from .game_arena import game_arena_mesh, game_arena_raycast, game_arena_sdf, game_surface_contacts
 
 ARENA_SHAPES = ("classic", "game")
@@ -41,6 +41,14 @@ def shape_raycast(shape, ox, oy, oz, dx, dy, dz, max_len):
     if shape == CLASSIC:
         return arena_raycast(ox, oy, oz, dx, dy, dz, max_len)
     return game_arena_raycast(ox, oy, oz, dx, dy, dz, max_len)
+
+
+@njit(cache=True, inline="always")
+def shape_distance(shape, x, y, z):
+    """The shape's signed distance from (x, y, z) to its surface (a literal: the other branch is compiled away)."""
+    if shape == CLASSIC:
+        return arena_distance(x, y, z)
+    return game_arena_sdf(x, y, z)[0]
 
 
 def shape_mesh(arena_shape: str, with_floor_and_ceiling: bool = True) -> tuple[np.ndarray, np.ndarray]:

@@ -17,7 +17,7 @@ from rlgym.api import TransitionEngine
 from rlgym.rocket_league.api import GameConfig, GameState, PhysicsObject
 from rlgym.rocket_league.common_values import BOOST_CONSUMPTION_RATE, GOAL_THRESHOLD, GRAVITY
 
-from rocketdrl_ma.physics import Arena, BallTouch, MutatorConfig
+from rocketdrl_ma.physics import DEFAULT_ARENA_SHAPE, Arena, BallTouch, MutatorConfig
 from rocketdrl_ma.physics import Car as PhysicsCar
 
 from .game_state import (HITBOX_PRESETS, ball_state, car_extra_state, car_state, physics_object, preset_of,
@@ -35,11 +35,13 @@ class RocketDRLEngine(TransitionEngine[AgentID, GameState, np.ndarray]):
     :param rlbot_delay: as ``RocketSimEngine``'s: actions act one tick late (RLBot's delay), so the first tick of
         an episode runs with no input.
     :param seed: seeds the arena's own random stream (demolished cars' respawn spots).
+    :param arena_shape: the arena's surface, ``"classic"`` (the default) or ``"game"`` (Rocket League's collision
+        surface, as ``RocketSimEngine``'s meshes).
     """
 
-    def __init__(self, rlbot_delay: bool = True, seed: int | None = None):
+    def __init__(self, rlbot_delay: bool = True, seed: int | None = None, arena_shape: str = DEFAULT_ARENA_SHAPE):
         self._rlbot_delay = bool(rlbot_delay)
-        self._arena = Arena(seed=seed)
+        self._arena = Arena(seed=seed, arena_shape=arena_shape)
         self._state: GameState | None = None
         self._tick_count = 0
         self._game_config: GameConfig | None = None

@@ -14,6 +14,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import Arena, Car, CarControls, DemoMode, MutatorConfig, PhysicsEvent, PhysicsEventKind
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE, arena_shape_index
 
 from . import events as game_events
 from .mutators import KickoffMutator, StateMutator
@@ -47,7 +48,8 @@ class Rules(ABC):
     DEFAULT_REWARD_WEIGHTS: dict[str, float] = {}
 
     def __init__(self, blue_size: int = 1, orange_size: int = 1, car_preset: str = "octane",
-                 reward_weights: dict[str, float] | None = None, boost_pads: bool = True, demos: bool = True):
+                 reward_weights: dict[str, float] | None = None, boost_pads: bool = True, demos: bool = True,
+                 arena_shape: str = DEFAULT_ARENA_SHAPE):
         for name, size in (("blue_size", blue_size), ("orange_size", orange_size)):
             if not isinstance(size, int) or not 0 <= size <= 4:
                 raise ValueError(f"{name}: must be an int in 0..4, got {size!r}")
@@ -59,6 +61,8 @@ class Rules(ABC):
         self.rewards = CombinedReward.from_weights(self.REWARD_TERMS,
                                                    {**self.DEFAULT_REWARD_WEIGHTS, **(reward_weights or {})})
         self.boost_pads, self.demos = boost_pads, demos
+        arena_shape_index(arena_shape)  # validates the name
+        self.arena_shape = arena_shape
         self.arena: Arena | None = None
         self.cars: dict[str, Car] = {}
         self.obstacles: tuple[Obstacle, ...] = ()
@@ -72,8 +76,8 @@ class Rules(ABC):
         self._control_matrix = np.zeros((0, len(_NEUTRAL_ROW)))
         self._neutral_matrix = self._control_matrix
         self._applied_frozen: bool | None = None  # what apply_controls last wrote this decision (None: nothing)
-        # Makes the arena on the first reset from a seed the episode's rng draws; None: a lone Arena(seed).
-        # A vectorised env sets it to hand out the arenas of one ArenaBatch.
+        # Makes the arena on the first reset from a seed the episode's rng draws; None: a lone Arena(seed) of the
+        # rules' arena_shape. A vectorised env sets it to hand out the arenas of one ArenaBatch (of that shape).
         self.arena_factory: Callable[[int], Arena] | None = None
 
     # ------------------------------------------------------------------ what a game mode defines
@@ -108,7 +112,8 @@ class Rules(ABC):
 
     # ------------------------------------------------------------------ machinery the env drives
     def build(self, seed: int | None = None) -> None:
-        self.arena = Arena(seed=seed) if self.arena_factory is None else self.arena_factory(seed)
+        self.arena = (Arena(seed=seed, arena_shape=self.arena_shape) if self.arena_factory is None
+                      else self.arena_factory(seed))
         self.arena.set_mutator_config(MutatorConfig(demo_mode=DemoMode.NORMAL if self.demos else DemoMode.DISABLED,
                                                     boost_pads=self.boost_pads))
         for agent in self.possible_agents:
@@ -209,7 +214,7 @@ class Rules(ABC):
             ball=arena.ball.get_state(), pad_timers=arena.boost_pad_timers(),
             last_controls=dict(self.last_controls), last_touch=self.last_touch, obstacles=self.obstacles,
             events=list(self.events), car_configs={agent: car.config for agent, car in self.cars.items()},
-            **self._scoreboard_fields())
+            arena_shape=self.arena_shape, **self._scoreboard_fields())
 
     def _scoreboard_fields(self) -> dict:
         """GameState fields (score, clock_s, is_overtime, kickoff_pending) a subclass fills in."""

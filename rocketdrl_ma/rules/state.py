@@ -8,6 +8,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import BallState, CarConfig, CarControls, CarState
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE
 
 from .events import GameEvent
 
@@ -66,3 +67,4 @@ class GameState:
     events: list[GameEvent] = field(default_factory=list)  # this decision's events, in tick order
     car_configs: dict[str, CarConfig] = field(default_factory=dict)  # hitbox preset of each car
     mode_state: dict = field(default_factory=dict)  # a game mode's own flags its sensors read (minigames)
+    arena_shape: str = DEFAULT_ARENA_SHAPE  # the arena's surface (``physics.arena_shape.ARENA_SHAPES``): rays hit it

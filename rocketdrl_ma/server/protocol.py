@@ -35,6 +35,7 @@ import msgpack
 import numpy as np
 
 from rocketdrl_ma.physics import PRESETS, BallState, CarConfig, CarControls, CarState
+from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE, arena_shape_index
 from rocketdrl_ma.physics.car_config import WheelPair
 from rocketdrl_ma.rules.events import GameEvent, events_from_dicts
 from rocketdrl_ma.rules.state import GameState, Obstacle
@@ -289,7 +290,7 @@ def encode_state(state: GameState) -> dict:
         "obstacles": [[np.asarray(o.center), np.asarray(o.half_extents)] for o in state.obstacles],
         "events": [event.as_dict() for event in state.events],
         "car_configs": {agent: _config_to_wire(c) for agent, c in state.car_configs.items()},
-        "mode_state": state.mode_state,
+        "mode_state": state.mode_state, "arena_shape": state.arena_shape,
     }
 
 
@@ -300,6 +301,13 @@ def decode_events(events: Any) -> list[GameEvent]:
         return events_from_dicts(events)
     except (TypeError, ValueError) as e:
         raise ProtocolError(str(e)) from None
+
+
+def _arena_shape_from_wire(d: dict) -> str:
+    """The state's arena shape; a server older than the key plays in the classic arena."""
+    shape = d.get("arena_shape", DEFAULT_ARENA_SHAPE)
+    arena_shape_index(shape)  # a ValueError (a ProtocolError below) naming the shapes
+    return shape
 
 
 def decode_state(d: Any) -> GameState:
@@ -322,7 +330,7 @@ def decode_state(d: Any) -> GameState:
                             for c, h in d["obstacles"]),
             events=decode_events(d["events"]),
             car_configs={agent: _config_from_wire(c) for agent, c in d["car_configs"].items()},
-            mode_state=dict(d["mode_state"]))
+            mode_state=dict(d["mode_state"]), arena_shape=_arena_shape_from_wire(d))
     except ProtocolError:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as e:

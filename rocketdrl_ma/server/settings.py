@@ -279,7 +279,7 @@ class Limits:
     configs: tuple[str, ...] = ("matches", "minigames")
     overrides: tuple[str, ...] = ("clock_s", "overtime_limit_s", "kickoff_countdown_s", "boost_pads", "demos",
                                   "car_preset", "max_cycles", "observation", "action", "rounds", "timeout_s",
-                                  "difficulty")
+                                  "difficulty", "arena_shape")
     fill: tuple[str, ...] = ("idle", "scripted:*")
     requests_per_s: float = 50.0
     request_burst: int = 100

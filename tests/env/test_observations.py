@@ -6,7 +6,7 @@ import pytest
 
 from rocketdrl_ma.env.observations import (ARENA_DIAGONAL, OBS_BUILDERS, CombinedObs, ObsBuilder, RaySensor,
                                            SeedSensors, TeamRelativeObs, make_obs_builder)
-from rocketdrl_ma.env.observations.rays import ray_hits
+from rocketdrl_ma.env.observations.rays import ray_hits_classic
 from rocketdrl_ma.physics import BallState, CarControls, CarState, get_preset, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState, Obstacle, agent_names
@@ -268,7 +268,7 @@ def test_compiled_ray_hits_agree_with_marching_along_each_ray():
         axes = np.array([random_rotation(rng) for _ in range(m)]).reshape(m, 3, 3)
         half = rng.uniform(20.0, 300.0, (m, 3))
         classes = rng.integers(1, 3, m)
-        nearest, cls = ray_hits(origin, dirs, ball, C.BALL_RADIUS, centers, axes, half, classes, reach)
+        nearest, cls = ray_hits_classic(origin, dirs, ball, C.BALL_RADIUS, centers, axes, half, classes, reach)
         for i, d in enumerate(dirs):
             points = origin + ts[:, None] * d
             inside = [np.linalg.norm(points - ball, axis=1) <= C.BALL_RADIUS]

@@ -384,6 +384,25 @@ def test_controls_are_clamped_and_buttons_read_as_bool():
     np.testing.assert_array_equal(finals[0], finals[1])
 
 
+def _ball_off_the_side_wall_fillet(engine: RocketDRLEngine) -> np.ndarray:
+    """The ball's velocity 0.5 s after it is sent at 1,500 uu/s into the side wall at z = 250."""
+    state = engine.create_base_state()
+    SceneMutator({}, (3500, 0, 250)).apply(state, {})
+    state.ball.linear_velocity = np.array([1500, 0, 0], dtype=np.float32)
+    engine.set_state(state, {})
+    for _ in range(60):
+        state = engine.step({}, {})
+    return state.ball.linear_velocity
+
+
+def test_the_engine_takes_the_arena_shape():
+    game, classic = RocketDRLEngine(arena_shape="game"), RocketDRLEngine()
+    assert game.arena.batch.arena_shape == "game" and classic.arena.batch.arena_shape == "classic"
+    assert np.linalg.norm(_ball_off_the_side_wall_fillet(game) - _ball_off_the_side_wall_fillet(classic)) > 200.0
+    with pytest.raises(ValueError, match=r"arena_shape: must be one of 'classic', 'game', got 'round'"):
+        RocketDRLEngine(arena_shape="round")
+
+
 def test_no_cars_steps_one_tick():
     engine = RocketDRLEngine()
     state = engine.create_base_state()

@@ -94,6 +94,7 @@ def _assert_states_equal(a, b):
     assert a.last_controls == b.last_controls
     assert a.car_configs == b.car_configs
     assert a.events == b.events and a.mode_state == b.mode_state
+    assert a.arena_shape == b.arena_shape
     assert len(a.obstacles) == len(b.obstacles)
     for x, y in zip(a.obstacles, b.obstacles):
         assert np.array_equal(x.center, y.center) and np.array_equal(x.half_extents, y.half_extents)
@@ -114,6 +115,17 @@ def test_game_state_round_trip():
     _assert_states_equal(state, back)
     assert back.car_configs["blue_0"] is PRESETS["octane"]  # a stock preset travels by name
     env.close()
+
+
+def test_the_arena_shape_travels_with_the_state():
+    env = rocketdrl_ma.parallel_env("matches/1v1.yaml", arena_shape="game")
+    env.reset(seed=0)
+    wire = unpack(pack({"s": encode_state(env.rules.game_state())}))["s"]
+    env.close()
+    assert decode_state(wire).arena_shape == "game"
+    assert decode_state({k: v for k, v in wire.items() if k != "arena_shape"}).arena_shape == "classic"  # older
+    with pytest.raises(ProtocolError, match=r"arena_shape: must be one of 'classic', 'game'"):
+        decode_state(dict(wire, arena_shape="round"))
 
 
 def test_malformed_state_is_a_protocol_error():

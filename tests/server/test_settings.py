@@ -135,6 +135,7 @@ def test_limits_bound_what_the_lobby_accepts():
             limits.check_config_name(bad)
     base = MatchOptions()
     limits.check_options(base)
+    limits.check_options(MatchOptions.from_dict({"overrides": {"arena_shape": "game"}}))  # a match creator's choice
     for changes, message in [({"deadline_ms": 1e9}, "deadline_ms"), ({"deadline_ms": 0.0}, "deadline_ms"),
                              ({"ready_timeout_s": 1e12}, "ready_timeout_s"),
                              ({"fill": "checkpoint:/etc/passwd"}, "fill: 'checkpoint:/etc/passwd' is not allowed"),

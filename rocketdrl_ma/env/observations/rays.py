@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 from gymnasium import spaces
-from numba import njit
+from numba import literally, njit
 
 from rocketdrl_ma.physics import get_preset
 from rocketdrl_ma.physics import constants as C
-from rocketdrl_ma.physics.arena_geometry import arena_distance, arena_raycast
+from rocketdrl_ma.physics.arena_shape import CLASSIC, GAME, arena_shape_index, shape_distance, shape_raycast
 from rocketdrl_ma.rules.state import GameState, agent_team
 
 from .base import ObsBuilder, box_space, check_sizes, clip_to_space
@@ -20,24 +20,24 @@ _MIN_MARCH_STEP = 1.0  # uu: the fallback march's smallest step (its worst-case 
 _MAX_MARCH_STEPS = 8192
 
 
-@njit(cache=True)
-def arena_ray_distances(origin, dirs, max_len):
-    """Distance along each unit ray in ``dirs`` (n, 3) from ``origin`` to the arena surface; inf if none
-    within ``max_len``. Uses ``arena_raycast``; when it reports a miss, the ray is marched on over the
-    distance field, because a sphere tracer running out of steps (a ray grazing the floor from a car's
-    centre, ~17 uu up) also reports a miss."""
+@njit(cache=True, inline="always")
+def arena_ray_distances(shape, origin, dirs, max_len):
+    """Distance along each unit ray in ``dirs`` (n, 3) from ``origin`` to the surface of the arena of ``shape``
+    (``arena_shape``'s integer, a literal); inf if none within ``max_len``. Uses the shape's ray cast; when it
+    reports a miss, the ray is marched on over the distance field, because a sphere tracer running out of steps (a
+    ray grazing the floor from a car's centre, ~17 uu up) also reports a miss."""
     n = dirs.shape[0]
     out = np.full(n, np.inf)
     ox, oy, oz = origin[0], origin[1], origin[2]
     for i in range(n):
         dx, dy, dz = dirs[i, 0], dirs[i, 1], dirs[i, 2]
-        hit, t, _, _, _ = arena_raycast(ox, oy, oz, dx, dy, dz, max_len)
+        hit, t, _, _, _ = shape_raycast(shape, ox, oy, oz, dx, dy, dz, max_len)
         if hit:
             out[i] = t
             continue
         t = 0.0
         for _ in range(_MAX_MARCH_STEPS):
-            d = arena_distance(ox + dx * t, oy + dy * t, oz + dz * t)
+            d = shape_distance(shape, ox + dx * t, oy + dy * t, oz + dz * t)
             if d < 0.02:
                 out[i] = t
                 break
@@ -83,14 +83,16 @@ def _ray_box(ox, oy, oz, dx, dy, dz, center, axes, half):
 
 
 @njit(cache=True)
-def ray_hits(origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
+def ray_hits(shape, origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
     """Per unit ray in ``dirs`` (n, 3) from ``origin``: the nearest hit distance within ``reach`` (inf if
     none) and its class (index into ``RAY_CLASSES``; -1 if none): the ball sphere, oriented boxes of class
-    ``box_class[m]`` (cars, barriers), and the arena. On a tie the lower class wins."""
+    ``box_class[m]`` (cars, barriers), and the arena of ``shape`` (``arena_shape``'s integer, compiled per value:
+    call ``ray_hits_classic`` or ``ray_hits_game``). On a tie the lower class wins."""
+    literally(shape)
     n = dirs.shape[0]
     nearest = np.full(n, np.inf)
     cls = np.full(n, -1, np.int64)
-    walls = arena_ray_distances(origin, dirs, reach)
+    walls = arena_ray_distances(shape, origin, dirs, reach)
     ox, oy, oz = origin[0], origin[1], origin[2]
     for i in range(n):
         dx, dy, dz = dirs[i, 0], dirs[i, 1], dirs[i, 2]
@@ -104,6 +106,22 @@ def ray_hits(origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_hal
         if best <= reach:
             nearest[i], cls[i] = best, best_cls
     return nearest, cls
+
+
+@njit(cache=True)
+def ray_hits_classic(origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
+    """``ray_hits`` in the "classic" arena."""
+    return ray_hits(CLASSIC, origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach)
+
+
+@njit(cache=True)
+def ray_hits_game(origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
+    """``ray_hits`` in the "game" arena."""
+    return ray_hits(GAME, origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach)
+
+
+#: the compiled ray kernel of each arena shape, by ``arena_shape_index``
+RAY_HITS_BY_SHAPE = (ray_hits_classic, ray_hits_game)
 
 
 class RaySensor(ObsBuilder):
@@ -121,7 +139,7 @@ class RaySensor(ObsBuilder):
     1      hit the ball (sphere of radius 91.25 at the ball's centre)           {0, 1}
     2      hit another car (its hitbox: an oriented box; demoed cars are gone)  {0, 1}
     3      hit a barrier (``state.obstacles``, axis-aligned boxes)              {0, 1}
-    4      hit the arena (walls, floor, ceiling, goals: ``arena_raycast``)      {0, 1}
+    4      hit the arena (walls, floor, ceiling, goals; ``state.arena_shape``) {0, 1}
     ====== =================================================================== ========
 
     The nearest hit wins; the one-hot is all zero when nothing is within reach. Hitboxes come from
@@ -174,9 +192,10 @@ class RaySensor(ObsBuilder):
         else:
             centers, axes, half = np.empty((0, 3)), np.empty((0, 3, 3)), np.empty((0, 3))
         # fresh writable copies: a read-only state array (a decoded server state) would compile another signature
-        return ray_hits(np.array(car.pos, dtype=np.float64), self.ray_directions(car.rot_mat),
-                        np.array(state.ball.pos, dtype=np.float64), C.BALL_RADIUS, centers, axes, half,
-                        np.array(box_class, dtype=np.int64), self.reach_uu)
+        ray_hits_of_shape = RAY_HITS_BY_SHAPE[arena_shape_index(state.arena_shape)]
+        return ray_hits_of_shape(np.array(car.pos, dtype=np.float64), self.ray_directions(car.rot_mat),
+                                 np.array(state.ball.pos, dtype=np.float64), C.BALL_RADIUS, centers, axes, half,
+                                 np.array(box_class, dtype=np.int64), self.reach_uu)
 
     def build(self, agent: str, state: GameState) -> np.ndarray:
         agent_team(agent)  # validates the name

@@ -27,6 +27,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import Arena, BallState, Car, CarState, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE
 
 from .. import events as game_events
 from .. import rewards
@@ -107,10 +108,11 @@ class ShotMinigame(Rules):
     KEEPERS = 0  # orange goalkeepers (the competitive penalty has one)
 
     def __init__(self, rounds: int = 1, timeout_s: float = 10.0, difficulty: float = 1.0, miss_line_y: float = 0.0,
-                 car_boost: float = 100.0, car_preset: str = "octane", reward_weights: dict[str, float] | None = None):
+                 car_boost: float = 100.0, car_preset: str = "octane", reward_weights: dict[str, float] | None = None,
+                 arena_shape: str = DEFAULT_ARENA_SHAPE):
         super().__init__(blue_size=1, orange_size=self.KEEPERS, car_preset=car_preset,
                          reward_weights=reward_weights,
-                         boost_pads=False, demos=False)
+                         boost_pads=False, demos=False, arena_shape=arena_shape)
         if isinstance(rounds, bool) or not isinstance(rounds, int) or rounds < 1:
             raise ValueError(f"rounds: must be an int >= 1, got {rounds!r}")
         self.rounds = rounds
