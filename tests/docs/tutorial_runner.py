@@ -14,13 +14,12 @@ from __future__ import annotations
 
 import os
 import re
-import signal
 import subprocess
 import sys
-import threading
-import time
 from dataclasses import dataclass
 from pathlib import Path
+
+from output_process import OutputProcess
 
 REPO = Path(__file__).resolve().parents[2]
 FENCE_OPEN = re.compile(r'^```(?P<lang>[\w-]+)(?:\s+title="(?P<title>[^"]*)")?\s*$')
@@ -134,49 +133,6 @@ def with_args(command: str, *args: str) -> str:
     return " ".join([command, *args])
 
 
-class Background:
-    """A command left running, as in a second terminal: its output lines collected, stopped by its PID."""
-
-    def __init__(self, command: str, popen: subprocess.Popen):
-        self.command, self.popen, self.pid = command, popen, popen.pid
-        self.lines: list[str] = []
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        for line in self.popen.stdout:
-            self.lines.append(line.rstrip("\n"))
-
-    def line(self, startswith: str, timeout_s: float = 60.0) -> str:
-        end = time.monotonic() + timeout_s
-        while True:
-            for line in list(self.lines):
-                if line.startswith(startswith):
-                    return line
-            ended = self.popen.poll() is not None and not self._reader.is_alive()
-            if ended or time.monotonic() > end:
-                raise AssertionError(f"no line starting with {startswith!r} from `{self.command}` "
-                                     f"({'it exited' if ended else 'timed out'}); output:\n{self.output()}")
-            time.sleep(0.05)
-
-    def wait(self, timeout_s: float) -> int:
-        code = self.popen.wait(timeout_s)
-        self._reader.join(10)
-        return code
-
-    def output(self) -> str:
-        return "\n".join(self.lines)
-
-    def stop(self) -> None:
-        if self.popen.poll() is None:
-            os.kill(self.pid, signal.SIGTERM)
-            try:
-                self.popen.wait(15)
-            except subprocess.TimeoutExpired:
-                os.kill(self.pid, signal.SIGKILL)
-                self.popen.wait(10)
-
-
 class Shell:
     """The reader's terminal: an empty folder, this checkout's ``rocketdrl-ma`` and ``python`` first on PATH."""
 
@@ -191,7 +147,7 @@ class Shell:
                     "PYTHONUNBUFFERED": "1",
                     # a server key trusted on first use is remembered here, never in the real home folder
                     "ROCKETDRL_MA_KNOWN_SERVERS": str(folder / ".known_servers")}
-        self.background: list[Background] = []
+        self.background: list[OutputProcess] = []
 
     def run(self, command: str, timeout_s: float = 120.0) -> str:
         """Runs a command to its end; fails with its output unless it exits 0. Returns its standard output."""
@@ -200,11 +156,9 @@ class Shell:
         assert done.returncode == 0, f"`{command}` exited {done.returncode}:\n{done.stdout}{done.stderr}"
         return done.stdout
 
-    def start(self, command: str) -> Background:
+    def start(self, command: str) -> OutputProcess:
         """Starts a command that keeps running (a server); ``exec`` so the PID is the command's own."""
-        popen = subprocess.Popen(["bash", "-c", f"exec {command}"], cwd=self.folder, env=self.env,
-                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        started = Background(command, popen)
+        started = OutputProcess(["bash", "-c", f"exec {command}"], cwd=self.folder, env=self.env)
         self.background.append(started)
         return started
 

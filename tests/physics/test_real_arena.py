@@ -27,20 +27,8 @@ def _ours(scene: BallScene, arena_shape: str = "classic") -> np.ndarray:
 def test_zero_g_ball_off_the_back_wall_below_the_fillet_top():
     """1,500 uu/s straight into the back wall at z = 200, beside the goal: the game's wall is flat there (its ramp
     ends at 256 uu), so the ball comes straight back; ours meets our ramp and is sent up."""
-    pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
-    folder = mesh_folder_or_none()
-    if folder is None:
-        pytest.skip("rlgym-rocket-league's collision meshes are not installed")
     scene = BallScene(pos=(1500.0, 4500.0, 200.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE, gravity_z=0.0)
-    (theirs,) = ball_trajectories_on_meshes([scene], folder)
-    game, ours = theirs.vel[-1], _ours(scene)
-    print(f"outgoing velocity after 1 s: RocketSim on the meshes {np.round(game, 1)}, ours {np.round(ours, 1)}")
-    cos = float(np.dot(game, ours) / (np.linalg.norm(game) * np.linalg.norm(ours)))
-    angle = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
-    speed_error = abs(np.linalg.norm(ours) / np.linalg.norm(game) - 1.0)
-    assert speed_error < SPEED_TOLERANCE and angle < ANGLE_TOLERANCE_DEG, (
-        f"RocketSim {np.round(game, 1)} vs ours {np.round(ours, 1)}: speed off {100 * speed_error:.1f} %, "
-        f"direction off {angle:.1f} deg")
+    _assert_outgoing_velocity_as_rocketsims(scene, "classic", "back wall at z = 200")
 
 
 GAME_SHAPE_SCENES = {
@@ -69,13 +57,18 @@ _NOT_YET = {"crossbar at z = 640": _DEEP_FIRST_CONTACT, "post at x = 900": _DEEP
 def test_zero_g_ball_off_the_game_shaped_arena(name):
     """The game-shaped arena (``arena_shape="game"``) sends a zero-g ball off the walls below the fillets' tops,
     the crossbar and a post as RocketSim on the meshes does."""
+    _assert_outgoing_velocity_as_rocketsims(GAME_SHAPE_SCENES[name], "game", name)
+
+
+def _assert_outgoing_velocity_as_rocketsims(scene: BallScene, arena_shape: str, name: str) -> None:
+    """The ball's velocity after the scene, in our arena of ``arena_shape`` and in RocketSim on the meshes: the same
+    speed within SPEED_TOLERANCE and direction within ANGLE_TOLERANCE_DEG."""
     pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
     folder = mesh_folder_or_none()
     if folder is None:
         pytest.skip("rlgym-rocket-league's collision meshes are not installed")
-    scene = GAME_SHAPE_SCENES[name]
     (theirs,) = ball_trajectories_on_meshes([scene], folder)
-    game, ours = theirs.vel[-1], _ours(scene, "game")
+    game, ours = theirs.vel[-1], _ours(scene, arena_shape)
     print(f"{name}: RocketSim on the meshes {np.round(game, 1)}, ours {np.round(ours, 1)}")
     cos = float(np.dot(game, ours) / (np.linalg.norm(game) * np.linalg.norm(ours)))
     angle = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))

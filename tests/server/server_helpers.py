@@ -2,15 +2,14 @@
 ``rocketdrl-ma serve`` subprocesses, bot subprocesses, and polling helpers (no fixed sleeps)."""
 from __future__ import annotations
 
-import os
 import socket
-import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
 import zenoh
+
+from output_process import OutputProcess
 
 from rocketdrl_ma.server.client import LobbyClient, SealedStream
 from rocketdrl_ma.server.lobby import MatchServer
@@ -84,40 +83,7 @@ def cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "rocketdrl_ma.cli", *args]
 
 
-class Proc:
-    """A subprocess whose output lines are collected by a reader thread (so waiting can time out)."""
-
-    def __init__(self, argv: list[str]):
-        env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-        self.popen = subprocess.Popen(argv, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                      env=env)
-        self.pid = self.popen.pid
-        self.lines: list[str] = []
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        for line in self.popen.stdout:
-            self.lines.append(line.rstrip("\n"))
-
-    def line(self, startswith: str, timeout_s: float = 60.0) -> str:
-        """The first output line starting with ``startswith``; fails if the process ends or time runs out."""
-        end = time.monotonic() + timeout_s
-        while True:
-            for line in list(self.lines):
-                if line.startswith(startswith):
-                    return line
-            ended = self.popen.poll() is not None and not self._reader.is_alive()
-            if ended or time.monotonic() > end:
-                raise AssertionError(f"no line starting with {startswith!r} from {self.popen.args} "
-                                     f"({'it exited' if ended else 'timed out'}); output:\n{self.output()}")
-            time.sleep(0.05)
-
-    def wait(self, timeout_s: float = 60.0) -> int:
-        return self.popen.wait(timeout_s)
-
-    def output(self) -> str:
-        return "\n".join(self.lines)
+Proc = OutputProcess
 
 
 class Procs:

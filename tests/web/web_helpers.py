@@ -4,16 +4,15 @@ and short replays written by the env itself."""
 from __future__ import annotations
 
 import json
-import os
 import shutil
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 
 import msgpack
 
+from output_process import OutputProcess
 from ports import free_port
 
 REPO = Path(__file__).resolve().parents[2]
@@ -36,36 +35,7 @@ def cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "rocketdrl_ma.cli", *args]
 
 
-class Proc:
-    """A subprocess whose output lines a reader thread collects."""
-
-    def __init__(self, argv: list[str], cwd: Path = REPO):
-        self.popen = subprocess.Popen(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                      env={**os.environ, "PYTHONUNBUFFERED": "1"})
-        self.pid = self.popen.pid
-        self.lines: list[str] = []
-        self._reader = threading.Thread(target=self._read, daemon=True)
-        self._reader.start()
-
-    def _read(self) -> None:
-        for line in self.popen.stdout:
-            self.lines.append(line.rstrip("\n"))
-
-    def line(self, startswith: str, timeout_s: float = 60.0) -> str:
-        def found():
-            if self.popen.poll() is not None and not self._reader.is_alive():
-                raise AssertionError(f"{self.popen.args} exited:\n" + "\n".join(self.lines))
-            return next((line for line in list(self.lines) if line.startswith(startswith)), None)
-        return wait_for(found, timeout_s, f"a line starting with {startswith!r}")
-
-    def stop(self) -> None:
-        if self.popen.poll() is None:
-            os.kill(self.pid, 15)
-            try:
-                self.popen.wait(10)
-            except subprocess.TimeoutExpired:
-                os.kill(self.pid, 9)
-                self.popen.wait(10)
+Proc = OutputProcess
 
 
 class Procs:
