@@ -4,6 +4,9 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+# the page's three.js and msgpack (`npm ci`); defined before the first rule that names it (make expands prerequisites
+# as it reads them)
+NODE_STAMP := node_modules/.installed
 
 .PHONY: demo test test-fast docs bench venv clean web-deps browser wheel benchmarl-venv
 
@@ -25,7 +28,6 @@ demo: $(STAMP) $(NODE_STAMP)
 		--orange rotator --clock 180 --set overtime_limit_s=30 --replay runs/demo/2v2.npz
 
 # The page of `rocketdrl-ma web`: three.js and msgpack from the npm registry, exactly as package-lock.json says.
-NODE_STAMP := node_modules/.installed
 web-deps: $(NODE_STAMP)
 
 $(NODE_STAMP): package.json package-lock.json
