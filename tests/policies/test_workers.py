@@ -80,6 +80,21 @@ def test_two_workers_give_the_same_losses_for_the_same_seed(tmp_path):
     assert all(np.isfinite(v) for losses in runs[0] for v in losses.values())
 
 
+@pytest.mark.slow
+def test_overlapping_workers_collect_each_batch_with_the_weights_of_one_update_before(tmp_path):
+    """``overlap`` (the default with worker processes): the workers collect the next batch while the learner
+    updates, so after the first batch every batch is exactly one update old, and a seed still gives one run."""
+    cfg = _selfplay_cfg(max_steps=1280)
+    runs = [train(cfg, tmp_path / f"r{k}" / "final.pt", tmp_path / f"r{k}", progress=False, workers=WorkerPlan(2))
+            for k in range(2)]
+    assert runs[0].policy_lags == [0, 1, 1, 1, 1]
+    assert runs[0].losses == runs[1].losses
+    off = train(cfg, tmp_path / "off" / "final.pt", tmp_path / "off", progress=False,
+                workers=WorkerPlan(2, overlap=False))
+    assert off.policy_lags == [0] * 5
+    assert off.losses[0] == runs[0].losses[0] and off.losses[1] != runs[0].losses[1]
+
+
 class _FailingOnce:
     """A collector whose first batch fails with ``error``; a rebuilt one delivers."""
 

@@ -132,6 +132,11 @@ class TrainConfig:
     """(YAML key ``async``) the learner updates on each worker's batch as it arrives while the others go on
     collecting (the policy lag, in updates, goes to TensorBoard); false: every iteration waits for all workers,
     and a seed and worker count give the same run"""
+    overlap: bool = True
+    """with worker processes and without ``async``: the workers collect the next batch, with the weights of the
+    update before, while the learner updates on this one, so no core waits; every batch is then exactly one
+    update old (policy lag 1, corrected by PPO's importance ratio) and a seed and worker count still give the same
+    run; false: the workers wait while the learner updates (lag 0)"""
     watch_every: int = 0
     """every that many iterations, play one greedy evaluation episode of the current policy and publish it for
     ``rocketdrl-ma web`` (``rocketdrl_ma/web/training.py``); 0: never"""
@@ -189,6 +194,7 @@ def validate_train_config(raw: Mapping[str, Any]) -> TrainConfig:
     if values["n_workers"] is not None:  # 0: no worker processes; null: one per core
         check_int("n_workers", values["n_workers"], minimum=0)
     check_bool("async", values["asynchronous"])
+    check_bool("overlap", values["overlap"])
     check_int("watch_every", values["watch_every"], minimum=0)  # 0: no evaluation episodes to watch
     connect = values["watch_connect"]
     if not (isinstance(connect, (list, tuple)) and all(isinstance(e, str) for e in connect)):
