@@ -16,8 +16,9 @@ Keys besides ``observation``/``action``/``reward``/``done``/``terminated``/``tru
   generator, that the policy turns into an opponent), and ``teacher_action`` with a kickstart teacher
   (``selfplay.kickstart``, or a single-team game's top-level ``kickstart``: one scripted teacher per env copy,
   asked here where the game state is, its labels shipped with the trajectory);
-- written for the learner's bookkeeping (what a trajectory batch must carry back): ``shaping`` (the shaping
-  term), ``episode_end``/``episode_return``/``episode_length``/``episode_success`` on the rows whose episode
+- written for the learner's bookkeeping (what a trajectory batch must carry back): ``env_cpu_s`` (the CPU
+  seconds the games took to play this decision, spread evenly over the rows: what the env alone would need,
+  from which the learner shows the share of the env's speed it keeps), ``shaping`` (the shaping term), ``episode_end``/``episode_return``/``episode_length``/``episode_success`` on the rows whose episode
   ended, and in self-play, on the first row of a copy, ``match_end``/``match_opponent``/``match_generation``/
   ``match_points`` (PFSP's results), ``match_team`` (the learner team's ``TEAM_LOG_METRICS`` in that match) and
   ``goals_for``/``goals_against``.
@@ -25,6 +26,7 @@ Keys besides ``observation``/``action``/``reward``/``done``/``terminated``/``tru
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -87,6 +89,7 @@ class RolloutEnv(EnvBase):
         r, dim = self.rows, self.games.observation_space.shape
         f32, i64, flag = torch.float32, torch.int64, torch.bool
         obs = {"observation": Unbounded(shape=(r,) + dim, dtype=f32), "shaping": Unbounded(shape=(r,), dtype=f32),
+               "env_cpu_s": Unbounded(shape=(r,), dtype=f32),
                "episode_end": Categorical(2, shape=(r,), dtype=flag), "episode_return": Unbounded(shape=(r,), dtype=f32),
                "episode_length": Unbounded(shape=(r,), dtype=i64),
                "episode_success": Categorical(2, shape=(r,), dtype=flag)}
@@ -152,6 +155,7 @@ class RolloutEnv(EnvBase):
         actions = action.numpy().astype(np.int64) if self.discrete else action.clamp(-1.0, 1.0).numpy()
         self._apply_controls(tensordict)
         stats = self._empty_stats()
+        cpu_start = time.thread_time()  # CPU, not wall time: a busy machine must not shrink the env's capacity
         if self.selfplay:
             starts = np.flatnonzero(self._episode_start[::self.copy_rows])
             if len(starts):
@@ -172,6 +176,7 @@ class RolloutEnv(EnvBase):
                 stats["match_team"][row] = result.team
         else:
             step = self.games.step(actions)
+        stats["env_cpu_s"][:] = (time.thread_time() - cpu_start) / self.rows
         self._obs = step.obs
         stats["shaping"][:] = step.shaping
         for episode in step.episodes:
@@ -206,9 +211,9 @@ class RolloutEnv(EnvBase):
 
     def _empty_stats(self) -> dict[str, np.ndarray]:
         r = self.rows
-        stats = {"shaping": np.zeros(r, np.float32), "episode_end": np.zeros(r, bool),
-                 "episode_return": np.zeros(r, np.float32), "episode_length": np.zeros(r, np.int64),
-                 "episode_success": np.zeros(r, bool)}
+        stats = {"shaping": np.zeros(r, np.float32), "env_cpu_s": np.zeros(r, np.float32),
+                 "episode_end": np.zeros(r, bool), "episode_return": np.zeros(r, np.float32),
+                 "episode_length": np.zeros(r, np.int64), "episode_success": np.zeros(r, bool)}
         if self.selfplay:
             stats.update({"match_end": np.zeros(r, bool), "match_opponent": np.zeros(r, np.int64),
                           "match_generation": np.zeros(r, np.int64), "match_points": np.zeros(r, np.float32),

@@ -58,6 +58,8 @@ class TrainResult:
     #: that wall time
     steps_per_s: float = float("nan")
     learner_share: float = float("nan")
+    #: agent steps per second the env alone would step on the workers' cores (from the CPU time its games took)
+    env_capacity_steps_per_s: float = float("nan")
     #: a Ctrl-C or SIGTERM ended the run before ``max_steps`` (its checkpoint is written all the same)
     stopped: bool = False
 
@@ -183,7 +185,8 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     losses: dict[str, float] = {}
     loss_history: list[dict[str, float]] = []
     lags: list[int] = []
-    speed = (float("nan"), float("nan"))  # steps/s and the learner's share, from the first batch on
+    # steps/s, the learner's share and the env's capacity, from the first batch on
+    speed = (float("nan"), float("nan"), float("nan"))
     match = MatchTally(probe.rows_per_copy)
     # A warm-started policy was fitted to inputs scaled by the imitation data's statistics. Fed with PPO's
     # own states they drift (by up to 0.5 in mean and 1.5 in variance over 0.4M self-play steps), and the
@@ -192,7 +195,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     frozen_norm = started_from
     iteration, env_config = 0, wcfg.env
     bar = tqdm(total=cfg.max_steps, initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
-    start_time, start_steps, busy_learning = None, agent_steps, 0.0
+    start_time, start_steps, busy_learning, env_cpu_s = None, agent_steps, 0.0, 0.0
     stop = StopRequest()
     try:
         while agent_steps < cfg.max_steps and not stop.requested:
@@ -214,6 +217,8 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             t1 = time.monotonic()
             steps = batch.numel()
             agent_steps += steps
+            if start_time is not None:
+                env_cpu_s += float(batch.get(("next", "env_cpu_s")).sum())
             if overlapping and agent_steps < cfg.max_steps and not stop.requested:
                 # the next batch is collected with the weights of the update before this one
                 sync_controls(policy, difficulty, kick_weight > 0.0, opponents)
@@ -250,10 +255,15 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             bar.update(steps)
             level = "" if difficulty is None else f"  difficulty {difficulty:.2f}"
             outcome = match.describe() if opponents is not None else _describe(success, ret)
-            bar.set_postfix_str(f"{rate:,.0f} steps/s  learner {busy_learning / max(elapsed, 1e-9):.0%}  "
-                                f"{rollouts.describe()}  {outcome}{level}")
-            perf = {"collect_s": collect_s, "learn_s": learn_s, "agent_steps_per_s": rate, "policy_lag": lag}
-            speed = (rate, busy_learning / max(elapsed, 1e-9)) if not first else speed
+            # what the env alone would step on the workers' cores: their env CPU time as if nothing else ran
+            capacity = plan.processes * (agent_steps - start_steps) / env_cpu_s if env_cpu_s else float("nan")
+            share = f" ({rate / capacity:.0%} of the env's {capacity:,.0f})" if not first else ""
+            bar.set_postfix_str(f"{rate:,.0f} steps/s{share}  learner {busy_learning / max(elapsed, 1e-9):.0%}  "
+                                f"lag {lag}  {rollouts.describe()}  {outcome}{level}")
+            perf = {"collect_s": collect_s, "learn_s": learn_s, "agent_steps_per_s": rate, "policy_lag": lag,
+                    "env_capacity_steps_per_s": capacity, "env_share": rate / capacity,
+                    "learner_share": busy_learning / max(elapsed, 1e-9)}
+            speed = (rate, busy_learning / max(elapsed, 1e-9), capacity) if not first else speed
             # ---- curriculum (ML-Agents' lessons): harder once the last episodes at this level succeed often enough
             if curriculum and difficulty < 1.0 and len(recent) == SUCCESS_WINDOW and success >= curriculum.threshold:
                 difficulty = min(1.0, round(difficulty + curriculum.step, 6))
