@@ -147,7 +147,8 @@ def sample_env_actions(model: PPOModel, obs: torch.Tensor | np.ndarray) -> np.nd
     if model.action["kind"] == "box":
         loc, scale = model.policy(x)
         return env_actions(model.action, torch.normal(loc, scale))
-    return env_actions(model.action, torch.distributions.Categorical(logits=model.policy(x)).sample())
+    sampled = torch.distributions.Categorical(logits=model.policy(x), validate_args=False).sample()
+    return env_actions(model.action, sampled)
 
 
 def env_actions(action: dict, sampled: torch.Tensor) -> np.ndarray:
