@@ -15,6 +15,7 @@ bots connect as clients) or a router's. Peers that connect to each other directl
 """
 from __future__ import annotations
 
+import secrets
 from pathlib import Path
 
 from rocketdrl_ma.validation import check_name
@@ -39,6 +40,23 @@ def read_users_file(path: str | Path) -> dict[str, str]:
             raise ValueError(f"access.users_file: line {n} is not 'user:password'")
         users[check_name(f"access.users_file line {n}", user)] = password
     return users
+
+
+def add_missing_users(path: str | Path, users: list[str]) -> list[str]:
+    """Give every user of ``users`` without a password in ``path`` a random one (the file is created readable by
+    its owner only); the users added."""
+    from .crypto import write_private
+    p = Path(path)
+    existing = read_users_file(p) if p.is_file() else {}
+    missing = [u for u in users if u not in existing]
+    if missing:
+        lines = "".join(f"{u}:{secrets.token_urlsafe(24)}\n" for u in missing)
+        if p.is_file():
+            with open(p, "a") as f:
+                f.write(lines)
+        else:
+            write_private(p, lines.encode())
+    return missing
 
 
 def acl_config(server: str, roles: dict[str, str], router: bool = False) -> dict:
