@@ -52,17 +52,23 @@ def _verify(cfg, path: str, workers: int) -> int:
 
 
 def _run_league_bot(args: argparse.Namespace) -> int:
-    from rocketdrl_ma.server.bot import PolicyBot, local_client_settings
+    from rocketdrl_ma.server.bot import PolicyBot
 
     from rocketdrl_ma.validation import check_name
     from rocketdrl_ma.league.remote import serve_invitations
+    from .server import _client_settings
 
     entrant = check_name("entrant", args.entrant)
-    session = local_client_settings(args.connect).open()
-    print(f"league bot {entrant} ({args.policy}) waiting for invitations from server {args.server!r}", flush=True)
+    args.user = args.user or (None if args.config else entrant)  # the entrant's user unless its YAML names one
+    client = _client_settings(args)
+    if client.user_name != entrant:
+        raise ValueError(f"--entrant {entrant!r}: the league seats it as user {entrant!r}, but this client is "
+                         f"user {client.user_name!r}")
+    session = client.zenoh.open()
+    print(f"league bot {entrant} ({args.policy}) waiting for invitations from server {client.server!r}", flush=True)
     try:
-        played = serve_invitations(session, args.server, entrant, lambda: PolicyBot(args.policy, name=entrant),
-                                   max_matches=args.max_matches,
+        played = serve_invitations(session, client.server, entrant, lambda: PolicyBot(args.policy, name=entrant),
+                                   max_matches=args.max_matches, client=client,
                                    on_match=lambda m, reports: print(f"played {m}", flush=True))
     finally:
         session.close()
@@ -71,6 +77,8 @@ def _run_league_bot(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
+    from .server import _add_client_options, _clean_errors
+
     p = sub.add_parser("league", help="play a league (e.g. leagues/main.yaml): ratings, payoff matrix, report")
     p.add_argument("config", help="league YAML, e.g. leagues/main.yaml")
     p.add_argument("--results", default=None, help="replace the config's results store (SQLite)")
@@ -92,7 +100,6 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("league-bot", help="a remote league entrant: wait for invitations, play them on the server")
     b.add_argument("--entrant", required=True, help="the entrant's name in the league YAML (remote: true)")
     b.add_argument("--policy", required=True, help="a load_policy spec, e.g. checkpoint:PATH")
-    b.add_argument("--server", default="local", help="the match server's name")
-    b.add_argument("--connect", action="append", default=None, help="Zenoh endpoint of the server (client mode)")
     b.add_argument("--max-matches", type=int, default=None, help="stop after this many matches")
-    b.set_defaults(run=_run_league_bot)
+    _add_client_options(b)  # --config: the entrant's client YAML (its user and password, the server's key)
+    b.set_defaults(run=_clean_errors(_run_league_bot))

@@ -198,6 +198,11 @@ class LobbyClient:
     def request(self, op: str, args: dict | None = None, prove_with: bytes | None = None,
                 nonce: bytes | None = None) -> dict:
         """One lobby op; the reply body, once verified. ``prove_with``: a secret to MAC a fresh challenge with."""
+        return self._request(op, args, prove_with, nonce)[0]
+
+    def _request(self, op: str, args: dict | None, prove_with: bytes | None,
+                 nonce: bytes | None) -> tuple[dict, bytes]:
+        """The verified reply body, and the signed reply as it came."""
         import zenoh
         server_key = self.server_key
         nonce = nonce or random_bytes()
@@ -221,7 +226,7 @@ class LobbyClient:
                 unverified.append("a signed reply to another request")
                 continue
             if body.get("ok") is True:
-                return body
+                return body, raw
             raise ServerError(f"{op}: {body.get('error')}")
         raise ServerGone(f"no reply signed by server {self.keys.server!r} ({server_key.text}, {self.key_source}) "
                          f"on {self.keys.lobby(self.user)}" +
@@ -229,12 +234,15 @@ class LobbyClient:
 
     def create(self, config: str | dict, match_id: str | None = None, **options: Any) -> dict:
         """A new match (the admin role: the admin secret proves it). The reply's ``tickets`` map each slot
-        that needs one to its ticket (hex), for the bots the creator invites."""
+        that needs one to its ticket (hex), for the bots the creator invites (sealed to this request's key: no
+        one else who gets the reply reads them); ``signed``: the server's signed reply as it came (a league
+        sends it with its invitations, so its entrants know the server made their seats)."""
         exchange, nonce = KeyExchange(), random_bytes()
         args = {"config": config, **options, "client_key": exchange.public_bytes}
         if match_id is not None:
             args["id"] = match_id
-        reply = self.request("create", args, prove_with=self.admin_secret(), nonce=nonce)
+        reply, signed = self._request("create", args, self.admin_secret(), nonce)
+        reply["signed"] = signed
         key = exchange.tickets_key(reply["server_key_exchange"], nonce, self.keys.server, reply["id"])
         sealed = reply.pop("tickets_sealed")
         if not isinstance(sealed, bytes):
