@@ -42,10 +42,11 @@ def _add_client_options(p: argparse.ArgumentParser) -> None:
                    help=f"Zenoh endpoint of the server or router (client mode; default {DEFAULT_CONNECT})")
     p.add_argument("--server-key", default=None,
                    help="the server's public key to pin (ed25519:..., printed by `rocketdrl-ma serve`)")
-    p.add_argument("--user", default=None, help="this client's user (default: its Zenoh user, else guest)")
+    p.add_argument("--user", default=None, help="this client's user (default: its Zenoh user, else local if the "
+                                                "server's folder holds its password, else guest)")
     p.add_argument("--key-dir", default=None,
-                   help="where a server on this machine keeps server.pub and admin.secret (default "
-                        "runs/server/<server>)")
+                   help="where a server on this machine keeps server.pub, admin.secret and users.txt (the "
+                        "passwords of its users) (default runs/server/<server>)")
 
 
 def _run_serve(args: argparse.Namespace) -> int:

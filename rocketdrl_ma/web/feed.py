@@ -18,7 +18,7 @@ from rocketdrl_ma.rules.state import GameState
 from rocketdrl_ma.server.client import LobbyClient, SealedStream, ServerError, ServerGone
 from rocketdrl_ma.server.protocol import Keys, MatchStatus, ProtocolError, decode_events, decode_state, unpack
 from rocketdrl_ma.validation import check_name
-from rocketdrl_ma.server.settings import ZenohSettings
+from rocketdrl_ma.server.settings import ClientSettings
 
 from .training import TrainingKeys
 
@@ -129,11 +129,12 @@ class Follower:
 
 
 class SpectatorFeed:
-    """A Zenoh session that reads one match server's lobby list, its matches and the training runs."""
+    """A Zenoh session that reads one match server's lobby list, its matches and the training runs, as the
+    client ``client`` (its user and password, the server's key it trusts)."""
 
-    def __init__(self, zenoh: ZenohSettings, server: str = "local", lobby_timeout_s: float = 2.0):
-        self.settings, self.server = zenoh, check_name("server", server)
-        self.keys, self.training_keys = Keys(server), TrainingKeys(server)
+    def __init__(self, client: ClientSettings, lobby_timeout_s: float = 2.0):
+        self.client, self.settings, self.server = client, client.zenoh, client.server
+        self.keys, self.training_keys = Keys(self.server), TrainingKeys(self.server)
         self.lobby_timeout_s = lobby_timeout_s
         self.session = None
 
@@ -149,7 +150,7 @@ class SpectatorFeed:
     def matches(self) -> list[dict]:
         """The lobby's list (id, status, mode, config, score...); empty when no server answers."""
         try:
-            return LobbyClient(self.session, self.server, self.lobby_timeout_s).list()
+            return LobbyClient(self.session, self.client, self.lobby_timeout_s).list()
         except (ServerGone, ServerError):
             return []
 
@@ -173,7 +174,7 @@ class SpectatorFeed:
             # subscribed first, then asked: a match that ends in between still shows its end
             follower = Follower(self.session, self.keys.state(source_id), self.keys.events(source_id))
             try:  # a match the server does not know is an error now, not a page that waits forever
-                lobby = LobbyClient(self.session, self.server, self.lobby_timeout_s)
+                lobby = LobbyClient(self.session, self.client, self.lobby_timeout_s)
                 follower.info = lobby.inspect(source_id)
             except (ServerGone, ServerError) as e:
                 follower.close()
