@@ -155,13 +155,16 @@ class SpectatorFeed:
             return []
 
     def training_runs(self) -> list[dict]:
-        """Training runs publishing evaluation episodes now (their liveliness tokens)."""
+        """Training runs publishing evaluation episodes now (their liveliness tokens): this client's user's by
+        their name, another user's as ``<user>.<run>``."""
         runs = []
         for reply in self.session.liveliness().get(self.training_keys.all_alive, timeout=self.lobby_timeout_s):
             if reply.ok is not None:
-                run = self.training_keys.parse_alive(str(reply.ok.key_expr))
-                if run is not None:
-                    runs.append({"id": run, "status": "training"})
+                found = self.training_keys.parse_alive(str(reply.ok.key_expr))
+                if found is not None:
+                    user, run = found
+                    run_id = run if user == self.client.user_name else f"{user}.{run}"
+                    runs.append({"id": run_id, "status": "training", "user": user})
         return sorted(runs, key=lambda r: r["id"])
 
     def follow(self, kind: str, source_id: Any) -> Follower:
@@ -181,4 +184,6 @@ class SpectatorFeed:
                 raise ValueError(str(e)) from None
             follower.opener = _sealed(lobby, follower.info)
             return follower
-        return Follower(self.session, self.training_keys.state(source_id), self.training_keys.events(source_id))
+        user, _, run = source_id.rpartition(".")
+        user = user or self.client.user_name
+        return Follower(self.session, self.training_keys.state(user, run), self.training_keys.events(user, run))

@@ -199,11 +199,13 @@ def train(session, lobby: Lobby, args, stop: threading.Event) -> dict:
     tokens = [session.liveliness().declare_token(f"{k}/alive") for k in keys]
     print("ready", flush=True)
     sent = 0
-    while not stop.wait(0.05):
+    while True:
         for key in keys:
             session.put(f"{key}/state", pack({"match": args.match, "decision": sent, "status": "running",
                                                "done": False, "info": {"run": args.match, "iteration": 1}}))
         sent += 1
+        if stop.wait(0.05):
+            break
     for token in tokens:
         token.undeclare()
     return {"sent": sent}

@@ -386,3 +386,24 @@ def test_nobody_else_plays_a_league_entrants_seats(secure, procs, tmp_path):
         run_league(cfg, client=secure.client("ops"))
     hostile.popen.terminate()
     assert ResultsStore(cfg.results).results() == []
+
+
+def test_only_a_users_own_training_runs_show_in_its_name(secure, procs):
+    """Training broadcasts live under their trainer's prefix, which the access control lets only that user
+    publish on: mallory's forged runs (the old shared `train/**`, or under alice's prefix) never show, alice's
+    own run does, as `alice.<run>` to the web user."""
+    from rocketdrl_ma.web.feed import SpectatorFeed
+    from rocketdrl_ma.web.training import TrainingBroadcast
+    hostile, refused = lobby_attack(procs, "train", "lab", None, "--config", secure.client_file("mallory"),
+                                    "--victim", "alice", "--match", "fake")
+    assert refused is None, refused
+    broadcast = TrainingBroadcast("matches/1v1.yaml", "real", every=1, client=secure.client("alice"))
+    feed = SpectatorFeed(secure.client("web")).open()
+    try:
+        runs = wait_for(lambda: feed.training_runs(), 20, "alice's run in the list")
+        assert [r["id"] for r in runs] == ["alice.real"]
+    finally:
+        feed.close()
+        broadcast.close()
+        hostile.popen.terminate()
+    assert attack_result(hostile)["sent"] > 0
