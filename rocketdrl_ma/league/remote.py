@@ -6,8 +6,8 @@ match with the entrant's slots reserved for the entrant's user (seats: no secret
 invitation), sends it a ``get`` with ``{"match": id, "slots": [...], "signed": <the server's signed create
 reply>}``, and the bot answers and joins those slots through the Bot SDK as that user. The bot plays only an
 invitation whose reply the server signed (with the key the bot trusts) for a match an admin created with
-those slots as the entrant's seats: a forged or foreign invitation is refused and never counted. The league retries while nobody answers (the bot may still be
-starting); no answer within the server link's ``join_timeout_s`` means the entrant is not there, and
+those slots as the entrant's seats: a forged or foreign invitation is refused and never counted. The league
+retries while nobody answers (the bot may still be starting); no answer within the server link's ``join_timeout_s`` means the entrant is not there, and
 the league stops (the match is stopped on the server and nothing is recorded for it).
 """
 from __future__ import annotations

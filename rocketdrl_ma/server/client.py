@@ -132,8 +132,8 @@ class JoinInfo:
     @classmethod
     def from_reply(cls, r: dict, secret: bytes, rejoin_key: bytes) -> "JoinInfo":
         return cls(match=r["match"], instance=r["instance"], slot=r["slot"], user=r["user"], secret=secret,
-                   rejoin_key=rejoin_key, lease=r["lease"], status=r["status"], mode=r["mode"], deadline_ms=r["deadline_ms"],
-                   decision_ticks=r["decision_ticks"], config=r["config"], observation=r["observation"],
+                   rejoin_key=rejoin_key, lease=r["lease"], status=r["status"], mode=r["mode"],
+                   deadline_ms=r["deadline_ms"], decision_ticks=r["decision_ticks"], config=r["config"], observation=r["observation"],
                    action=r["action"], observation_space=decode_space(r["observation_space"]),
                    action_space=decode_space(r["action_space"]), keys=r["keys"])
 

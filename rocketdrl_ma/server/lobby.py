@@ -8,8 +8,9 @@ error, is sealed (signed) and echoes the request's ``op`` and ``nonce``: ``{"kin
 "op", "nonce", "ok": true, ...}`` or ``{..., "ok": false, "error": "..."}``.
 
 Ops: ``challenge`` (a single-use nonce for a MAC), ``list``, ``inspect``, ``create`` and ``stop`` (the
-admin role and the admin secret), ``join`` (an open match, the user's seat, or the slot's ticket),
-``rejoin`` and ``leave`` (the slot's secret).
+admin role and the admin secret; ``create``'s tickets come back sealed to the request's ``client_key``),
+``join`` (an open match, the user's seat, or the slot's ticket), ``rejoin`` (the slot's rejoin key: new
+keys) and ``leave`` (the slot's secret).
 """
 from __future__ import annotations
 
@@ -18,7 +19,6 @@ import secrets
 import threading
 import time
 from collections import OrderedDict
-from pathlib import Path
 from typing import Any
 
 from rocketdrl_ma.config import load_config
@@ -336,12 +336,12 @@ class MatchServer:
             self._check_admin(op, user, role, proves, allow_players=access.create == "player")
             fields = {k: v for k, v in args.items() if k not in ("id", "client_key")}
             options = MatchOptions.from_dict(fields, self.settings.match_defaults)
+            match_id = check_name("id", args["id"]) if args.get("id") is not None else secrets.token_hex(4)
             # the tickets are sealed to the creator's one-use key (covered by the request's MAC): whoever else
             # gets this signed reply, a relay that resent the request included, reads none
             exchange = KeyExchange()
-            exchange.derive(args.get("client_key"), request["nonce"], b"")  # a bad key fails before the match exists
-            runner = self.create(options, args.get("id"), creator=user)
-            key = exchange.tickets_key(args["client_key"], request["nonce"], self.settings.name, runner.id)
+            key = exchange.tickets_key(args.get("client_key"), request["nonce"], self.settings.name, match_id)
+            runner = self.create(options, match_id, creator=user)
             return {**runner.inspect(), "creator_role": role, "server_key_exchange": exchange.public_bytes,
                     "tickets_sealed": seal_secret(key, pack_value(runner.tickets))}
         if op == "stop":

@@ -195,7 +195,8 @@ def answer_invite(session, lobby: Lobby, args, stop: threading.Event) -> dict:
 
 
 def train(session, lobby: Lobby, args, stop: threading.Event) -> dict:
-    keys = [f"rocketdrl/{args.server}/train/{args.match}", f"rocketdrl/{args.server}/u/{args.victim}/train/{args.match}"]
+    root = f"rocketdrl/{args.server}"
+    keys = [f"{root}/train/{args.match}", f"{root}/u/{args.victim}/train/{args.match}"]
     tokens = [session.liveliness().declare_token(f"{k}/alive") for k in keys]
     print("ready", flush=True)
     sent = 0

@@ -17,7 +17,8 @@ def test_shipped_configs_load_and_are_secure(monkeypatch):
     assert local.zenoh.mode == "peer" and local.zenoh.listen_endpoints() == ("tcp/127.0.0.1:7447",)
     assert not local.zenoh.multicast and local.match_defaults.deadline_ms == 50 and not local.match_defaults.open
     # authenticated by default: its users' passwords made in its key dir on the first start
-    assert local.access.enabled and local.access.roles == {"local": "admin"} and str(local.keys_path) == "runs/server/local"
+    assert local.access.enabled and local.access.roles == {"local": "admin"}
+    assert str(local.keys_path) == "runs/server/local"
     assert str(local.users_path) == "runs/server/local/users.txt"
     demo = ServerSettings.load("server/open.yaml")  # the open mode, named as such
     assert not demo.access.enabled and demo.zenoh.listen_endpoints() == ("tcp/127.0.0.1:7447",) and demo.name == "local"
