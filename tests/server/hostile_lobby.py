@@ -116,6 +116,9 @@ def relay(session, lobby: Lobby, args) -> dict:
                 seen[op] = payload
 
     queryable = session.declare_queryable(f"rocketdrl/{args.server}/u/{args.victim}/lobby", on_query)
+    # declared with the lobby queryable: who hears this probe's answer gets its queries routed here too
+    probe = session.declare_queryable(f"rocketdrl/{args.server}/u/{args.victim}/probe",
+                                      lambda query: query.reply(query.key_expr, b"here"))
     print("ready", flush=True)
     deadline = time.monotonic() + args.wait_s
     while time.monotonic() < deadline and "challenge" not in seen:
@@ -145,6 +148,7 @@ def relay(session, lobby: Lobby, args) -> dict:
                 joined.append(slot)
     result["joined_with_stolen_tickets"] = joined
     queryable.undeclare()
+    probe.undeclare()
     return result
 
 

@@ -330,6 +330,8 @@ def test_a_relayed_create_gives_the_relay_no_ticket(procs, tmp_path):
     r = Running(tmp_path, match_defaults={"open": False}, limits={"requests_per_s": 0.5, "request_burst": 1})
     try:
         hostile, _ = lobby_attack(procs, "relay", "test", r.endpoint, "--victim", "guest", "--refill-s", "2.5")
+        probe = "rocketdrl/test/u/guest/probe"  # the relay's queryables reached the admin's session
+        wait_for(lambda: any(reply.ok is not None for reply in r.session.get(probe, timeout=1.0)), 30, "the relay")
         with pytest.raises((ServerGone, ServerError)):  # its create is rate limited (or refused as replayed)
             r.lobby.create("matches/1v1.yaml", "stolen", ready_timeout_s=60, fill="idle")
         got = attack_result(hostile)
