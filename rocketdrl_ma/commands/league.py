@@ -23,7 +23,12 @@ def _run_league(args: argparse.Namespace) -> int:
             print(f"[{match.index + 1}/{len(planned)}] {match.key}: {match.blue} {result.score_blue} - "
                   f"{result.score_orange} {match.orange} (seed {match.seed}, {result.duration_s:.0f} s)", flush=True)
 
-        run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray)
+        client = None
+        if args.client_config:
+            from rocketdrl_ma.server.settings import ClientSettings
+            client = ClientSettings.load(args.client_config)
+        run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray,
+                         client=client)
         print(f"league {cfg.name}: {run.scheduled} scheduled, {run.already_stored} already stored, "
               f"{run.played} played now", flush=True)
     with ResultsStore(cfg.results) as store:
@@ -85,6 +90,9 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--report", default=None, help="replace the config's report folder")
     p.add_argument("--max-matches", type=int, default=None, help="play at most this many missing matches")
     p.add_argument("--report-only", action="store_true", help="rate the stored matches, play none")
+    p.add_argument("--client-config", default=None,
+                   help="remote entrants: a client YAML for the match server (an admin's, from `rocketdrl-ma keys`); "
+                        "default: the password and key in the server's folder on this machine")
     p.add_argument("--workers", type=int, default=0,
                    help="play this many local matches at once, each in its own process (default 0: one at a "
                         "time in this process); results and ratings are the same either way")

@@ -7,8 +7,8 @@ invitation), sends it a ``get`` with ``{"match": id, "slots": [...], "signed": <
 reply>}``, and the bot answers and joins those slots through the Bot SDK as that user. The bot plays only an
 invitation whose reply the server signed (with the key the bot trusts) for a match an admin created with
 those slots as the entrant's seats: a forged or foreign invitation is refused and never counted. The league
-retries while nobody answers (the bot may still be starting); no answer within the server link's ``join_timeout_s`` means the entrant is not there, and
-the league stops (the match is stopped on the server and nothing is recorded for it).
+retries while nobody answers (the bot may still be starting); no answer within the server link's
+``join_timeout_s`` means the entrant is not there, and the league stops (the match is stopped on the server and nothing is recorded for it).
 """
 from __future__ import annotations
 
@@ -78,9 +78,7 @@ def serve_invitations(session, server: str, entrant: str, make_bot: Callable[[],
     """Play every match the league invites ``entrant`` to (``make_bot()`` -> a fresh ``Bot`` per car) until
     ``max_matches`` were played or ``stop`` is set; the number of matches played. ``client``: a
     ``ClientSettings`` for the server (its user must be ``entrant``; default: unauthenticated, as it)."""
-    from rocketdrl_ma.server.client import resolve_client
-
-    from rocketdrl_ma.server.client import LobbyClient
+    from rocketdrl_ma.server.client import LobbyClient, resolve_client
 
     client = resolve_client(client, server=server, user=entrant)
     server_key = LobbyClient(session, client).server_key  # trusted before any invitation is read

@@ -124,8 +124,8 @@ def run_league(cfg: LeagueConfig, max_matches: int | None = None,
 
 
 def server_client(cfg: LeagueConfig, client=None):
-    """``client`` (its server name and endpoints from the league's server link unless it names them), or a
-    client of the link's server on this machine."""
+    """``client`` if given, else a client of the link's server at its endpoints (with the password and key in
+    the server's folder when the server runs on this machine)."""
     from rocketdrl_ma.server.settings import ClientSettings, ZenohSettings
     if client is not None:
         return client
