@@ -170,6 +170,7 @@ def test_the_wheel_serves_a_match_that_two_bots_play(installed):
     try:
         server.line("server key ed25519:", 120)
         created = run([cli, "lobby", "create", "matches/1v1.yaml", "--id", "M", "--ready-timeout", "60",
+                       "--print-tickets",
                        "--set", "clock_s=3", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=1",
                        *client], elsewhere, env, 120)
         tickets = dict(line.split()[1:3] for line in created.splitlines() if line.startswith("ticket "))

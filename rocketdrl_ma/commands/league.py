@@ -23,7 +23,12 @@ def _run_league(args: argparse.Namespace) -> int:
             print(f"[{match.index + 1}/{len(planned)}] {match.key}: {match.blue} {result.score_blue} - "
                   f"{result.score_orange} {match.orange} (seed {match.seed}, {result.duration_s:.0f} s)", flush=True)
 
-        run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray)
+        client = None
+        if args.client_config:
+            from rocketdrl_ma.server.settings import ClientSettings
+            client = ClientSettings.load(args.client_config)
+        run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray,
+                         client=client)
         print(f"league {cfg.name}: {run.scheduled} scheduled, {run.already_stored} already stored, "
               f"{run.played} played now", flush=True)
     with ResultsStore(cfg.results) as store:
@@ -52,17 +57,23 @@ def _verify(cfg, path: str, workers: int) -> int:
 
 
 def _run_league_bot(args: argparse.Namespace) -> int:
-    from rocketdrl_ma.server.bot import PolicyBot, local_client_settings
+    from rocketdrl_ma.server.bot import PolicyBot
 
     from rocketdrl_ma.validation import check_name
     from rocketdrl_ma.league.remote import serve_invitations
+    from .server import _client_settings
 
     entrant = check_name("entrant", args.entrant)
-    session = local_client_settings(args.connect).open()
-    print(f"league bot {entrant} ({args.policy}) waiting for invitations from server {args.server!r}", flush=True)
+    args.user = args.user or (None if args.config else entrant)  # the entrant's user unless its YAML names one
+    client = _client_settings(args)
+    if client.user_name != entrant:
+        raise ValueError(f"--entrant {entrant!r}: the league seats it as user {entrant!r}, but this client is "
+                         f"user {client.user_name!r}")
+    session = client.zenoh.open()
+    print(f"league bot {entrant} ({args.policy}) waiting for invitations from server {client.server!r}", flush=True)
     try:
-        played = serve_invitations(session, args.server, entrant, lambda: PolicyBot(args.policy, name=entrant),
-                                   max_matches=args.max_matches,
+        played = serve_invitations(session, client.server, entrant, lambda: PolicyBot(args.policy, name=entrant),
+                                   max_matches=args.max_matches, client=client,
                                    on_match=lambda m, reports: print(f"played {m}", flush=True))
     finally:
         session.close()
@@ -71,12 +82,17 @@ def _run_league_bot(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
+    from .server import _add_client_options, _clean_errors
+
     p = sub.add_parser("league", help="play a league (e.g. leagues/main.yaml): ratings, payoff matrix, report")
     p.add_argument("config", help="league YAML, e.g. leagues/main.yaml")
     p.add_argument("--results", default=None, help="replace the config's results store (SQLite)")
     p.add_argument("--report", default=None, help="replace the config's report folder")
     p.add_argument("--max-matches", type=int, default=None, help="play at most this many missing matches")
     p.add_argument("--report-only", action="store_true", help="rate the stored matches, play none")
+    p.add_argument("--client-config", default=None,
+                   help="remote entrants: a client YAML for the match server (an admin's, from `rocketdrl-ma keys`); "
+                        "default: the password and key in the server's folder on this machine")
     p.add_argument("--workers", type=int, default=0,
                    help="play this many local matches at once, each in its own process (default 0: one at a "
                         "time in this process); results and ratings are the same either way")
@@ -92,7 +108,6 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     b = sub.add_parser("league-bot", help="a remote league entrant: wait for invitations, play them on the server")
     b.add_argument("--entrant", required=True, help="the entrant's name in the league YAML (remote: true)")
     b.add_argument("--policy", required=True, help="a load_policy spec, e.g. checkpoint:PATH")
-    b.add_argument("--server", default="local", help="the match server's name")
-    b.add_argument("--connect", action="append", default=None, help="Zenoh endpoint of the server (client mode)")
     b.add_argument("--max-matches", type=int, default=None, help="stop after this many matches")
-    b.set_defaults(run=_run_league_bot)
+    _add_client_options(b)  # --config: the entrant's client YAML (its user and password, the server's key)
+    b.set_defaults(run=_clean_errors(_run_league_bot))

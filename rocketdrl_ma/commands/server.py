@@ -42,10 +42,11 @@ def _add_client_options(p: argparse.ArgumentParser) -> None:
                    help=f"Zenoh endpoint of the server or router (client mode; default {DEFAULT_CONNECT})")
     p.add_argument("--server-key", default=None,
                    help="the server's public key to pin (ed25519:..., printed by `rocketdrl-ma serve`)")
-    p.add_argument("--user", default=None, help="this client's user (default: its Zenoh user, else guest)")
+    p.add_argument("--user", default=None, help="this client's user (default: its Zenoh user, else local if the "
+                                                "server's folder holds its password, else guest)")
     p.add_argument("--key-dir", default=None,
-                   help="where a server on this machine keeps server.pub and admin.secret (default "
-                        "runs/server/<server>)")
+                   help="where a server on this machine keeps server.pub, admin.secret and users.txt (the "
+                        "passwords of its users) (default runs/server/<server>)")
 
 
 def _run_serve(args: argparse.Namespace) -> int:
@@ -71,15 +72,31 @@ def _run_serve(args: argparse.Namespace) -> int:
         endpoints = ", ".join(settings.zenoh.listen_endpoints()) or "(none)"
         print(f"serving {settings.name!r}: {settings.zenoh.mode} listening on {endpoints}, "
               f"connected to {list(settings.zenoh.connect)}; results in {server.store.path}", flush=True)
-        access = (f"Zenoh users from {settings.access.users_file}, access control on" if settings.access.enabled
-                  else "no Zenoh authentication: anyone who reaches the endpoint may play open matches")
+        access = (f"Zenoh users {sorted(settings.access.roles)} (passwords in {settings.users_path}), access "
+                  "control on" if settings.access.enabled else "OPEN MODE")
         print(f"server key {server.identity.public_text} (clients pin it with --server-key); admin secret in "
               f"{settings.keys_path / 'admin.secret'}; {access}", flush=True)
+        if not settings.access.enabled:
+            print("WARNING: OPEN MODE, for demos only: no Zenoh authentication. Any process that reaches "
+                  f"{endpoints} may read all the traffic and play open matches, by any user name; seats are "
+                  "refused. server/local.yaml authenticates every connection.", file=sys.stderr, flush=True)
         for match in list(server.matches.values()):  # the config's own matches: their tickets, for the operator
-            for slot, ticket in match.tickets.items():
-                print(f"match {match.id}: ticket {slot} {ticket}", flush=True)
+            if match.tickets:
+                path = write_tickets(settings.keys_path, match.id, match.tickets)
+                print(f"match {match.id}: tickets in {path} (readable by this OS user only)", flush=True)
         stop.wait()
     return 0
+
+
+def write_tickets(key_dir, match: str, tickets: dict) -> str:
+    """``<key_dir>/tickets/<match>.txt``: one ``slot ticket`` line each, readable by this OS user only."""
+    from pathlib import Path
+
+    from rocketdrl_ma.server.crypto import write_private
+    path = Path(key_dir) / "tickets" / f"{match}.txt"
+    path.unlink(missing_ok=True)  # a match id used again: its new tickets
+    write_private(path, "".join(f"{slot} {ticket}\n" for slot, ticket in tickets.items()).encode())
+    return str(path)
 
 
 def _settings_dict(settings) -> dict:
@@ -90,14 +107,22 @@ def _settings_dict(settings) -> dict:
 def _run_bot(args: argparse.Namespace) -> int:
     from rocketdrl_ma.server.bot import PolicyBot
 
+    from rocketdrl_ma.server.client import read_ticket
+    from rocketdrl_ma.server.crypto import write_private
+
     bot = PolicyBot(args.policy, name=args.name)
+    client = _client_settings(args)
 
     def joined(join) -> None:
+        path = client.keys_path / "rejoin" / f"{join.match}.{join.slot}"
+        path.unlink(missing_ok=True)  # a rejoin gets new keys: the old token is spent
+        write_private(path, (join.rejoin_token + "\n").encode())
+        shown = f" ({join.rejoin_token})" if args.print_secrets else ""
         print(f"joined match {join.match} as {join.slot} (status {join.status}); after a crash, rejoin with "
-              f"--rejoin {join.rejoin_token}", flush=True)
+              f"--rejoin {path}{shown}", flush=True)
 
-    report = bot.run(args.match, args.slot, client=_client_settings(args), ticket=args.ticket,
-                     rejoin=args.rejoin, on_joined=joined)
+    ticket = read_ticket(args.ticket, args.slot) if args.ticket else None
+    report = bot.run(args.match, args.slot, client=client, ticket=ticket, rejoin=args.rejoin, on_joined=joined)
     score = (report.summary or {}).get("score", {})
     print(f"match {report.match} {report.reason}: blue {score.get('blue')} - {score.get('orange')} orange; "
           f"{report.decisions} actions sent by {report.slot}" +
@@ -157,7 +182,10 @@ def _run_lobby(args: argparse.Namespace) -> int:
                 options["seats"] = _parse_seats(args.seat)
             reply = lobby.create(args.target, args.id, overrides=parse_set(args.set), **options)
             print(f"created match {reply['id']} ({reply['mode']}, slots {list(reply['slot_status'])})")
-            for slot, ticket in reply["tickets"].items():
+            if reply["tickets"]:
+                print(f"tickets in {write_tickets(client.keys_path, reply['id'], reply['tickets'])} (readable by "
+                      "you only): hand each bot its own, e.g. `rocketdrl-ma bot --ticket FILE --slot SLOT`")
+            for slot, ticket in reply["tickets"].items() if args.print_tickets else ():
                 print(f"ticket {slot} {ticket}")
         elif args.action == "list":
             for m in lobby.list():
@@ -206,8 +234,12 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     b.add_argument("--policy", required=True, help="a load_policy spec, e.g. scripted:ball_chaser")
     b.add_argument("--match", required=True)
     b.add_argument("--slot", default=None, help="e.g. blue_0 (default: any open slot)")
-    b.add_argument("--ticket", default=None, help="the slot's ticket from the match's creator (hex)")
-    b.add_argument("--rejoin", default=None, help="SLOT:SECRET printed when the bot joined: take that slot back")
+    b.add_argument("--ticket", default=None, help="the slot's ticket from the match's creator (hex), or the tickets "
+                                                  "file `lobby create` wrote (with --slot)")
+    b.add_argument("--rejoin", default=None, help="the rejoin token file the bot wrote when it joined (or the "
+                                                  "SLOT:KEY token itself): take that slot back")
+    b.add_argument("--print-secrets", action="store_true", help="also print the rejoin token (it is written to a "
+                                                                "private file either way)")
     b.add_argument("--name", default=None, help="the bot's name (default: the policy spec)")
     _add_client_options(b)
     b.set_defaults(run=_clean_errors(_run_bot))
@@ -234,7 +266,10 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     lo.add_argument("--seed", type=int, default=None)
     lo.add_argument("--set", action="append", default=None, help="config override KEY=VALUE (YAML value)")
     lo.add_argument("--open", action="store_true", help="create: any player may join an empty slot (no tickets)")
-    lo.add_argument("--seat", action="append", default=None, help="create: SLOT=USER, a slot only USER may join")
+    lo.add_argument("--seat", action="append", default=None, help="create: SLOT=USER, a slot only USER may join "
+                                                                   "(authenticated servers only)")
+    lo.add_argument("--print-tickets", action="store_true",
+                    help="create: also print the tickets (they are written to <key-dir>/tickets/<id>.txt either way)")
     lo.add_argument("--admin-secret-file", default=None,
                     help="the server's admin secret, for create and stop (default <key-dir>/admin.secret)")
     _add_client_options(lo)

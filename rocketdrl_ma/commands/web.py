@@ -4,15 +4,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-DEFAULT_CONNECT = "tcp/127.0.0.1:7447"
-
-
-def _zenoh_settings(args: argparse.Namespace):
-    from rocketdrl_ma.server.settings import ZenohSettings, load_zenoh_settings
-    if args.config:
-        return load_zenoh_settings(args.config)
-    return ZenohSettings(mode="client", connect=tuple(args.connect or [DEFAULT_CONNECT]))
-
 
 def _run_web(args: argparse.Namespace) -> int:
     from pathlib import Path
@@ -21,12 +12,15 @@ def _run_web(args: argparse.Namespace) -> int:
     from rocketdrl_ma.web.feed import SpectatorFeed
     from rocketdrl_ma.web.replays import ReplayLibrary
 
+    from .server import _client_settings
+
     try:
         if not is_loopback_host(args.host) and not args.allow_remote:
             raise ValueError(f"--host: {args.host!r} is not loopback; pass --allow-remote to serve the page to "
                              "other machines")
-        settings = None if args.no_zenoh else _zenoh_settings(args)
-        make_feed = None if settings is None else (lambda: SpectatorFeed(settings, args.server))
+        # a client like `watch`: --config's user and pinned key, else the password and key in the server's folder
+        settings = None if args.no_zenoh else _client_settings(args)
+        make_feed = None if settings is None else (lambda: SpectatorFeed(settings))
         library = ReplayLibrary(args.replays if args.replays is not None else ["runs"], args.replay or [])
         server = PageServer(make_feed, library, host=args.host, port=args.port, max_rate=args.max_rate,
                             node_modules=Path(args.node_modules) if args.node_modules else None)
@@ -35,7 +29,8 @@ def _run_web(args: argparse.Namespace) -> int:
         return 2
 
     def ready(s: PageServer) -> None:
-        where = "no Zenoh" if settings is None else f"match server {args.server!r} via {list(settings.connect)}"
+        where = "no Zenoh" if settings is None else \
+            f"match server {settings.server!r} via {list(settings.zenoh.connect)} as {settings.user_name}"
         print(f"page at {s.url()} ({where}; replays from {[str(f) for f in library.folders + library.files]})",
               flush=True)
 
@@ -44,14 +39,13 @@ def _run_web(args: argparse.Namespace) -> int:
 
 
 def add_commands(sub: argparse._SubParsersAction) -> None:
+    from .server import _add_client_options
+
     w = sub.add_parser("web", help="a page to watch live matches, replays and training runs in a browser")
     w.add_argument("--host", default="127.0.0.1", help="address to serve the page on (default loopback only)")
     w.add_argument("--port", type=int, default=8765, help="0: any free port")
     w.add_argument("--allow-remote", action="store_true", help="needed for a non-loopback --host")
-    w.add_argument("--server", default="local", help="the match server's name (rocketdrl/<server>/...)")
-    w.add_argument("--config", default=None, help="a YAML with a zenoh: section (e.g. server/client.yaml)")
-    w.add_argument("--connect", action="append", default=None,
-                   help=f"Zenoh endpoint of the match server or router (client mode; default {DEFAULT_CONNECT})")
+    _add_client_options(w)
     w.add_argument("--no-zenoh", action="store_true", help="replays only: no match server")
     w.add_argument("--replays", action="append", default=None,
                    help="a folder whose .npz replays the page lists (repeatable; default: runs)")

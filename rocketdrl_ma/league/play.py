@@ -85,11 +85,12 @@ def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session, client=Non
     seats = {slot: name if spec is None else lobby.user for slot, (name, spec) in slots.items()}
     # a fresh id each attempt: a match interrupted on the server must not block its replay
     match_id = f"{cfg.name}-{match.index}-{secrets.token_hex(3)}"
-    lobby.create(cfg.match, match_id, overrides=cfg.overrides, seed=match.seed, mode=link.mode,
-                 deadline_ms=link.deadline_ms, ready_timeout_s=2 * link.join_timeout_s, fill="idle", seats=seats)
+    created = lobby.create(cfg.match, match_id, overrides=cfg.overrides, seed=match.seed, mode=link.mode,
+                           deadline_ms=link.deadline_ms, ready_timeout_s=2 * link.join_timeout_s, fill="idle",
+                           seats=seats)
     try:
         for name, its_slots in remote.items():
-            invite(session, link.name, name, match_id, its_slots, link.join_timeout_s)
+            invite(session, link.name, name, match_id, its_slots, created["signed"], link.join_timeout_s)
     except Exception:
         lobby.stop(match_id)
         raise
@@ -119,6 +120,11 @@ def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session, client=Non
     not_joined = [s for s, st in info["slot_status"].items() if st["occupant"] != "remote"]
     if not_joined:
         raise RuntimeError(f"match {match.key}: slot(s) {not_joined} never got their bot; not recorded")
+    # who actually played each seat, as the server saw them (its users are authenticated)
+    impostors = {s: st["user"] for s, st in info["slot_status"].items() if st["user"] != seats[s]}
+    if impostors:
+        raise RuntimeError(f"match {match.key}: slot(s) played by other users than their seats {impostors}; "
+                           "not recorded")
     summary = info["summary"]
     clock_s = float(cfg.game_config["clock_s"])
     duration_s = clock_s + summary["clock_s"] if summary["overtime"] else clock_s - summary["clock_s"]

@@ -80,10 +80,13 @@ def _play_on_ray(cfg: LeagueConfig, matches: list[ScheduledMatch], address: str)
 
 def run_league(cfg: LeagueConfig, max_matches: int | None = None,
                on_result: Callable[[ScheduledMatch, MatchResult], None] | None = None,
-               workers: int = 0, ray: str | None = None) -> LeagueRun:
+               workers: int = 0, ray: str | None = None, client=None) -> LeagueRun:
     """Play the missing matches of ``cfg``'s schedule (at most ``max_matches`` of them) into its store; local
-    matches ``workers`` at a time (or on Ray), server matches one by one."""
+    matches ``workers`` at a time (or on Ray), server matches one by one. ``client``: how this process reaches,
+    authenticates to and trusts the match server (a ``ClientSettings``; default: the server link's endpoints,
+    with the password and key in the server's folder when it runs on this machine)."""
     planned = schedule(cfg)
+    client = server_client(cfg, client)
     session = None
     with ResultsStore(cfg.results) as store:
         stored = store.keys()
@@ -103,8 +106,8 @@ def run_league(cfg: LeagueConfig, max_matches: int | None = None,
             if workers <= 0 and ray is None:  # one at a time in schedule order, server matches among them
                 for match in todo:
                     if needs_server(cfg, match):
-                        session = session or _server_session(cfg)
-                        record(match, play_on_server(cfg, match, session))
+                        session = session or client.zenoh.open()
+                        record(match, play_on_server(cfg, match, session, client))
                     else:
                         record(match, play_local(cfg, match))
             else:
@@ -112,14 +115,19 @@ def run_league(cfg: LeagueConfig, max_matches: int | None = None,
                                                         workers, ray):
                     record(match, result)
                 for match in (m for m in todo if needs_server(cfg, m)):
-                    session = session or _server_session(cfg)
-                    record(match, play_on_server(cfg, match, session))
+                    session = session or client.zenoh.open()
+                    record(match, play_on_server(cfg, match, session, client))
         finally:
             if session is not None:
                 session.close()
     return LeagueRun(len(planned), sum(m.key in stored for m in planned), played)
 
 
-def _server_session(cfg: LeagueConfig):
-    from rocketdrl_ma.server.settings import ZenohSettings
-    return ZenohSettings(mode="client", connect=cfg.server.connect).open()
+def server_client(cfg: LeagueConfig, client=None):
+    """``client`` if given, else a client of the link's server at its endpoints (with the password and key in
+    the server's folder when the server runs on this machine)."""
+    from rocketdrl_ma.server.settings import ClientSettings, ZenohSettings
+    if client is not None:
+        return client
+    return ClientSettings.from_dict({"server": cfg.server.name,
+                                     "zenoh": ZenohSettings(mode="client", connect=tuple(cfg.server.connect))})

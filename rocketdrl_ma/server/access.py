@@ -3,9 +3,10 @@
 The rules (default deny; ``R`` is ``rocketdrl/<server>``):
 
 - every user: everything on its own prefix ``R/u/<user>/**`` (its lobby queries and their replies, its
-  slots' observations, actions, errors and liveliness tokens, a league bot's invitation queryable);
-  subscribing to the public ``R/match/*/state`` and ``R/match/*/events``; fetching ``R/key``; watching
-  the server's liveliness token ``R/alive``;
+  slots' observations, actions, errors and liveliness tokens, a league bot's invitation queryable, its
+  training runs' broadcast); subscribing to the public ``R/match/*/state`` and ``R/match/*/events``;
+  fetching ``R/key``; watching the server's liveliness token ``R/alive`` and every user's training runs
+  ``R/u/*/train/**``;
 - ``admin`` users also: querying any user's ``R/u/*/invite`` (the league invites its remote entrants);
 - the user ``server`` (the match server as a client of a router): everything under ``R/**``.
 
@@ -15,6 +16,7 @@ bots connect as clients) or a router's. Peers that connect to each other directl
 """
 from __future__ import annotations
 
+import secrets
 from pathlib import Path
 
 from rocketdrl_ma.validation import check_name
@@ -41,6 +43,23 @@ def read_users_file(path: str | Path) -> dict[str, str]:
     return users
 
 
+def add_missing_users(path: str | Path, users: list[str]) -> list[str]:
+    """Give every user of ``users`` without a password in ``path`` a random one (the file is created readable by
+    its owner only); the users added."""
+    from .crypto import write_private
+    p = Path(path)
+    existing = read_users_file(p) if p.is_file() else {}
+    missing = [u for u in users if u not in existing]
+    if missing:
+        lines = "".join(f"{u}:{secrets.token_urlsafe(24)}\n" for u in missing)
+        if p.is_file():
+            with open(p, "a") as f:
+                f.write(lines)
+        else:
+            write_private(p, lines.encode())
+    return missing
+
+
 def acl_config(server: str, roles: dict[str, str], router: bool = False) -> dict:
     """Zenoh's ``access_control`` section for ``server`` and ``{user: role}`` (``router``: the server is the
     router's client ``server`` and needs everything under its root)."""
@@ -57,10 +76,14 @@ def acl_config(server: str, roles: dict[str, str], router: bool = False) -> dict
         allow("key_reply", ["egress"], ["reply"], f"{root}/key"),
         allow("alive_watch", ["ingress"], ["declare_liveliness_subscriber", "liveliness_query"], f"{root}/alive"),
         allow("alive_token", ["egress"], ["liveliness_token"], f"{root}/alive"),
+        allow("train_watch", ["ingress"], ["declare_subscriber", "declare_liveliness_subscriber", "liveliness_query"],
+              f"{root}/u/*/train/**"),
+        allow("train_data", ["egress"], ["put", "liveliness_token"], f"{root}/u/*/train/**"),
         allow("invite_query", ["ingress"], ["query"], f"{root}/u/*/invite"),
         allow("invite_reply", ["egress"], ["reply"], f"{root}/u/*/invite"),
     ]
-    common = ["public_subscribe", "public_data", "key_query", "key_reply", "alive_watch", "alive_token"]
+    common = ["public_subscribe", "public_data", "key_query", "key_reply", "alive_watch", "alive_token", "train_watch",
+              "train_data"]
     subjects: list[dict] = []
     policies: list[dict] = []
     for user in sorted(roles):

@@ -16,10 +16,11 @@ import threading
 import time
 from collections import Counter
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
-from .crypto import (KeyExchange, ServerKey, SignatureError, parse_secret, random_bytes, read_secret_file,
-                     request_mac)
+from .crypto import (KeyExchange, ServerKey, SignatureError, open_secret, parse_secret, random_bytes,
+                     read_secret_file, request_mac)
 from .protocol import Keys, ProtocolError, decode_space, open_sealed, pack, pack_value, unpack, unpack_map
 from .settings import ClientSettings
 
@@ -115,6 +116,7 @@ class JoinInfo:
     slot: str
     user: str
     secret: bytes
+    rejoin_key: bytes
     lease: str
     status: str
     mode: str
@@ -128,24 +130,40 @@ class JoinInfo:
     keys: dict
 
     @classmethod
-    def from_reply(cls, r: dict, secret: bytes) -> "JoinInfo":
+    def from_reply(cls, r: dict, secret: bytes, rejoin_key: bytes) -> "JoinInfo":
         return cls(match=r["match"], instance=r["instance"], slot=r["slot"], user=r["user"], secret=secret,
-                   lease=r["lease"], status=r["status"], mode=r["mode"], deadline_ms=r["deadline_ms"],
-                   decision_ticks=r["decision_ticks"], config=r["config"], observation=r["observation"],
+                   rejoin_key=rejoin_key, lease=r["lease"], status=r["status"], mode=r["mode"],
+                   deadline_ms=r["deadline_ms"], decision_ticks=r["decision_ticks"], config=r["config"], observation=r["observation"],
                    action=r["action"], observation_space=decode_space(r["observation_space"]),
                    action_space=decode_space(r["action_space"]), keys=r["keys"])
 
     @property
     def rejoin_token(self) -> str:
-        """``<slot>:<secret as hex>``: what ``rocketdrl-ma bot --rejoin`` needs after a crash. Keep it private."""
-        return f"{self.slot}:{self.secret.hex()}"
+        """``<slot>:<rejoin key as hex>``: what ``rocketdrl-ma bot --rejoin`` needs after a crash. Keep it private:
+        it lets its holder take the slot back (with new keys), though it never signs an action."""
+        return f"{self.slot}:{self.rejoin_key.hex()}"
 
 
 def parse_rejoin_token(token: str) -> tuple[str, bytes]:
-    slot, sep, secret = token.partition(":")
+    """``<slot>:<rejoin key hex>``, or the path of a file holding it (``rocketdrl-ma bot`` writes one)."""
+    path = Path(token)
+    if ":" not in token and path.is_file():
+        token = path.read_text().strip()
+    slot, sep, key = token.partition(":")
     if not sep:
-        raise ValueError("rejoin: expected '<slot>:<secret hex>' (printed by the bot when it joined)")
-    return slot, parse_secret(secret, "rejoin")
+        raise ValueError("rejoin: expected '<slot>:<rejoin key hex>' or the file `rocketdrl-ma bot` wrote it to")
+    return slot, parse_secret(key, "rejoin")
+
+
+def read_ticket(value: str, slot: str | None) -> str:
+    """A ticket as hex, or the tickets file ``rocketdrl-ma lobby create`` wrote (``slot ticket`` lines): ``slot``'s."""
+    path = Path(value)
+    if not path.is_file():
+        return value
+    tickets = dict(line.split(None, 1) for line in path.read_text().splitlines() if line.strip())
+    if slot not in tickets:
+        raise ValueError(f"ticket: {value} holds tickets for {sorted(tickets)}; name one with --slot")
+    return tickets[slot].strip()
 
 
 class LobbyClient:
@@ -180,6 +198,11 @@ class LobbyClient:
     def request(self, op: str, args: dict | None = None, prove_with: bytes | None = None,
                 nonce: bytes | None = None) -> dict:
         """One lobby op; the reply body, once verified. ``prove_with``: a secret to MAC a fresh challenge with."""
+        return self._request(op, args, prove_with, nonce)[0]
+
+    def _request(self, op: str, args: dict | None, prove_with: bytes | None,
+                 nonce: bytes | None) -> tuple[dict, bytes]:
+        """The verified reply body, and the signed reply as it came."""
         import zenoh
         server_key = self.server_key
         nonce = nonce or random_bytes()
@@ -203,7 +226,7 @@ class LobbyClient:
                 unverified.append("a signed reply to another request")
                 continue
             if body.get("ok") is True:
-                return body
+                return body, raw
             raise ServerError(f"{op}: {body.get('error')}")
         raise ServerGone(f"no reply signed by server {self.keys.server!r} ({server_key.text}, {self.key_source}) "
                          f"on {self.keys.lobby(self.user)}" +
@@ -211,11 +234,21 @@ class LobbyClient:
 
     def create(self, config: str | dict, match_id: str | None = None, **options: Any) -> dict:
         """A new match (the admin role: the admin secret proves it). The reply's ``tickets`` map each slot
-        that needs one to its ticket (hex), for the bots the creator invites."""
-        args = {"config": config, **options}
+        that needs one to its ticket (hex), for the bots the creator invites (sealed to this request's key: no
+        one else who gets the reply reads them); ``signed``: the server's signed reply as it came (a league
+        sends it with its invitations, so its entrants know the server made their seats)."""
+        exchange, nonce = KeyExchange(), random_bytes()
+        args = {"config": config, **options, "client_key": exchange.public_bytes}
         if match_id is not None:
             args["id"] = match_id
-        return self.request("create", args, prove_with=self.admin_secret())
+        reply, signed = self._request("create", args, self.admin_secret(), nonce)
+        reply["signed"] = signed
+        key = exchange.tickets_key(reply["server_key_exchange"], nonce, self.keys.server, reply["id"])
+        sealed = reply.pop("tickets_sealed")
+        if not isinstance(sealed, bytes):
+            raise ProtocolError("tickets_sealed: expected the sealed tickets (bin)")
+        reply["tickets"] = unpack_map(open_secret(key, sealed), MAX_SERVER_MESSAGE_BYTES, "tickets")
+        return reply
 
     def list(self) -> list[dict]:
         return self.request("list")["matches"]
@@ -245,11 +278,17 @@ class LobbyClient:
         args = {"match": match, "slot": slot, "client_key": exchange.public_bytes, **fields}
         reply = self.request("join", args, prove_with=parse_secret(ticket, "ticket") if ticket else None,
                              nonce=nonce)
-        secret = exchange.slot_secret(reply["server_key_exchange"], nonce, self.keys.server, match, reply["slot"])
-        return JoinInfo.from_reply(reply, secret)
+        secret, rejoin_key = exchange.slot_keys(reply["server_key_exchange"], nonce, self.keys.server, match,
+                                                reply["slot"])
+        return JoinInfo.from_reply(reply, secret, rejoin_key)
 
-    def rejoin(self, match: str, slot: str, secret: bytes) -> JoinInfo:
-        return JoinInfo.from_reply(self.request("rejoin", {"match": match, "slot": slot}, prove_with=secret), secret)
+    def rejoin(self, match: str, slot: str, rejoin_key: bytes) -> JoinInfo:
+        """Take a slot back with its rejoin key; new keys replace the old ones (``rejoin_token`` changes)."""
+        exchange, nonce = KeyExchange(), random_bytes()
+        reply = self.request("rejoin", {"match": match, "slot": slot, "client_key": exchange.public_bytes},
+                             prove_with=rejoin_key, nonce=nonce)
+        return JoinInfo.from_reply(reply, *exchange.slot_keys(reply["server_key_exchange"], nonce, self.keys.server,
+                                                              match, slot))
 
     def leave(self, match: str, slot: str, secret: bytes) -> dict:
         return self.request("leave", {"match": match, "slot": slot}, prove_with=secret)

@@ -5,8 +5,12 @@
   (``ed25519:<base64 of the 32 raw bytes>``).
 - A slot's secret is agreed at the join by X25519: the bot sends a fresh public key, the server answers
   with its own (in the signed join reply), and both derive ``HKDF-SHA256(shared, salt=request nonce,
-  info=SLOT_TAG + server + 0 + match + 0 + slot)``. It never travels. Each action carries
-  ``HMAC-SHA256(slot secret, ACTION_TAG + body)``.
+  info=SLOT_TAG + server + 0 + match + 0 + slot)`` (64 bytes: the first 32 the slot's secret, the next 32
+  its rejoin key). Neither travels. Each action carries ``HMAC-SHA256(slot secret, ACTION_TAG + body)``; a
+  rejoin proves the rejoin key (never the action key) and agrees new keys by a new exchange.
+- A ``create`` carries a fresh X25519 key too: the tickets in its reply are sealed (ChaCha20-Poly1305) under
+  ``HKDF-SHA256(shared, salt=request nonce, info=TICKETS_TAG + server + 0 + match)``, readable by the
+  creator alone, whoever else receives the signed reply.
 - Admin ops, joins with a ticket, rejoins and leaves carry ``HMAC-SHA256(key, REQUEST_TAG + op + 0 + server
   + 0 + user + 0 + challenge + args)`` where the challenge is a single-use nonce the server handed out
   and ``key`` the admin secret, the ticket or the slot secret (raw bytes; shown to people as hex).
@@ -25,6 +29,7 @@ from cryptography.exceptions import InvalidSignature
 from cryptography.hazmat.primitives import serialization
 from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey, Ed25519PublicKey
 from cryptography.hazmat.primitives.asymmetric.x25519 import X25519PrivateKey, X25519PublicKey
+from cryptography.hazmat.primitives.ciphers.aead import ChaCha20Poly1305
 from cryptography.hazmat.primitives.hashes import SHA256
 from cryptography.hazmat.primitives.kdf.hkdf import HKDF
 
@@ -32,6 +37,7 @@ SIGNED_TAG = b"rocketdrl-ma/2 signed\x00"
 ACTION_TAG = b"rocketdrl-ma/2 act\x00"
 REQUEST_TAG = b"rocketdrl-ma/2 request\x00"
 SLOT_TAG = b"rocketdrl-ma/2 slot\x00"
+TICKETS_TAG = b"rocketdrl-ma/2 tickets\x00"
 KEY_PREFIX = "ed25519:"
 MAC_BYTES = 32
 NONCE_BYTES = 16
@@ -176,7 +182,7 @@ class KeyExchange:
         self.public_bytes = self._private.public_key().public_bytes(serialization.Encoding.Raw,
                                                                     serialization.PublicFormat.Raw)
 
-    def slot_secret(self, peer_public: bytes, nonce: bytes, server: str, match: str, slot: str) -> bytes:
+    def derive(self, peer_public: bytes, nonce: bytes, info: bytes, length: int = SECRET_BYTES) -> bytes:
         if not isinstance(peer_public, bytes) or len(peer_public) != 32:
             raise ValueError("client_key: expected the 32 raw bytes of an X25519 public key")
         try:
@@ -185,5 +191,29 @@ class KeyExchange:
             shared = bytes(32)
         if shared == bytes(32):
             raise ValueError("client_key: not a usable X25519 public key")
+        return HKDF(algorithm=SHA256(), length=length, salt=nonce, info=info).derive(shared)
+
+    def slot_keys(self, peer_public: bytes, nonce: bytes, server: str, match: str, slot: str) -> tuple[bytes, bytes]:
+        """The slot's action secret and its rejoin key."""
         info = SLOT_TAG + b"\x00".join(s.encode() for s in (server, match, slot))
-        return HKDF(algorithm=SHA256(), length=SECRET_BYTES, salt=nonce, info=info).derive(shared)
+        keys = self.derive(peer_public, nonce, info, 2 * SECRET_BYTES)
+        return keys[:SECRET_BYTES], keys[SECRET_BYTES:]
+
+    def tickets_key(self, peer_public: bytes, nonce: bytes, server: str, match: str) -> bytes:
+        return self.derive(peer_public, nonce, TICKETS_TAG + server.encode() + b"\x00" + match.encode())
+
+
+_ONE_USE_NONCE = bytes(12)  # every key sealed with is derived for one message only
+
+
+def seal_secret(key: bytes, plaintext: bytes) -> bytes:
+    return ChaCha20Poly1305(key).encrypt(_ONE_USE_NONCE, plaintext, None)
+
+
+def open_secret(key: bytes, sealed: bytes) -> bytes:
+    """``seal_secret``'s plaintext; ValueError if ``sealed`` was not made under ``key``."""
+    from cryptography.exceptions import InvalidTag
+    try:
+        return ChaCha20Poly1305(key).decrypt(_ONE_USE_NONCE, sealed, None)
+    except (InvalidTag, TypeError):
+        raise ValueError("tickets: not sealed to this request's key") from None

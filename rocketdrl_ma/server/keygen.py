@@ -93,16 +93,9 @@ def _leaf(ca_cert, ca_key, hosts: list[str], cert_path: Path, key_path: Path, ma
 
 
 def _users_file(path: Path, users: list[str], made: list[str]) -> dict[str, str]:
-    from .access import read_users_file
-    existing = read_users_file(path) if path.is_file() else {}
-    missing = [u for u in users if u not in existing]
+    from .access import add_missing_users, read_users_file
+    missing = add_missing_users(path, users)
     if missing:
-        lines = "".join(f"{u}:{secrets.token_urlsafe(24)}\n" for u in missing)
-        if path.is_file():
-            with open(path, "a") as f:
-                f.write(lines)
-        else:
-            write_private(path, lines.encode())
         made.append(f"passwords for {missing} in {path}")
     return read_users_file(path)
 
@@ -132,9 +125,9 @@ def make_keys(config: str, tls_hosts: list[str] | None = None, connect: list[str
     elif listen:
         made.append("no TLS certificate made: the listening zenoh.tls names no listen_certificate/listen_private_key")
     if not server.access.enabled:
-        made.append("no users: the config has no access.users_file")
+        made.append("no users: the config has no access section (the open mode)")
         return made
-    users = _users_file(Path(server.access.users_file), [SERVER_USER, *sorted(server.access.roles)], made)
+    users = _users_file(server.users_path, [SERVER_USER, *sorted(server.access.roles)], made)
     out = Path(clients_dir) if clients_dir else key_dir / "clients"
     endpoints = connect or listen or list(listener.listen_endpoints())
     for user, role in sorted(server.access.roles.items()):

@@ -8,8 +8,9 @@ error, is sealed (signed) and echoes the request's ``op`` and ``nonce``: ``{"kin
 "op", "nonce", "ok": true, ...}`` or ``{..., "ok": false, "error": "..."}``.
 
 Ops: ``challenge`` (a single-use nonce for a MAC), ``list``, ``inspect``, ``create`` and ``stop`` (the
-admin role and the admin secret), ``join`` (an open match, the user's seat, or the slot's ticket),
-``rejoin`` and ``leave`` (the slot's secret).
+admin role and the admin secret; ``create``'s tickets come back sealed to the request's ``client_key``),
+``join`` (an open match, the user's seat, or the slot's ticket), ``rejoin`` (the slot's rejoin key: new
+keys) and ``leave`` (the slot's secret).
 """
 from __future__ import annotations
 
@@ -18,17 +19,17 @@ import secrets
 import threading
 import time
 from collections import OrderedDict
-from pathlib import Path
 from typing import Any
 
 from rocketdrl_ma.config import load_config
 from rocketdrl_ma.results import MatchResult, ResultsStore
 from rocketdrl_ma.validation import check_name
 
-from .access import acl_config, read_users_file
-from .crypto import NONCE_BYTES, ServerIdentity, load_or_create_secret, random_bytes, request_mac, same_mac
+from .access import acl_config, add_missing_users, read_users_file
+from .crypto import (NONCE_BYTES, KeyExchange, ServerIdentity, load_or_create_secret, random_bytes, request_mac,
+                     same_mac, seal_secret)
 from .match import INTERNAL_ERROR, JoinRequest, MatchRunner
-from .protocol import (ENDED_STATUSES, MAX_REQUEST_BYTES, Keys, ProtocolError, pack, seal, unpack,
+from .protocol import (ENDED_STATUSES, MAX_REQUEST_BYTES, Keys, ProtocolError, pack, pack_value, seal, unpack,
                        unpack_map)
 from .settings import SERVER_USER, MatchOptions, ServerSettings
 
@@ -41,10 +42,13 @@ MAX_NONCE_BYTES = 64
 
 
 class RateLimiter:
-    """Token buckets: ``rate_per_s`` requests per user (``burst`` at once) and ten times that in total."""
+    """Token buckets: ``rate_per_s`` requests per user (``burst`` at once); ``shared_total``: also ten times that
+    in total. With Zenoh authentication the user in the key is who sent the request, so one user's flood empties
+    its own bucket only (no shared total a flood could drain); without it, names are free to claim and only a
+    total bounds what the server signs."""
 
-    def __init__(self, rate_per_s: float, burst: int, max_users: int = 4096):
-        self.rate, self.burst, self.max_users = rate_per_s, burst, max_users
+    def __init__(self, rate_per_s: float, burst: int, max_users: int = 4096, shared_total: bool = True):
+        self.rate, self.burst, self.max_users, self.shared_total = rate_per_s, burst, max_users, shared_total
         self._buckets: OrderedDict[str, list[float]] = OrderedDict()
         self._total = [burst * 10.0, time.monotonic()]
         self._lock = threading.Lock()
@@ -67,7 +71,7 @@ class RateLimiter:
             while len(self._buckets) > self.max_users:
                 self._buckets.popitem(last=False)
             return self._take(bucket, self.rate, self.burst, now) and \
-                self._take(self._total, self.rate * 10, self.burst * 10, now)
+                (not self.shared_total or self._take(self._total, self.rate * 10, self.burst * 10, now))
 
 
 class Challenges:
@@ -109,7 +113,8 @@ class MatchServer:
         self.matches: dict[str, MatchRunner] = {}
         self._lock = threading.Lock()
         self._store_lock = threading.Lock()
-        self._rate = RateLimiter(settings.limits.requests_per_s, settings.limits.request_burst)
+        self._rate = RateLimiter(settings.limits.requests_per_s, settings.limits.request_burst,
+                                 shared_total=not settings.access.enabled)
         self._challenges = Challenges()
         self.session = None
         self._declared: list[Any] = []
@@ -123,7 +128,11 @@ class MatchServer:
         if not access.enabled:
             return {}
         zenoh = self.settings.zenoh
-        users = read_users_file(access.users_file)
+        users_path = self.settings.users_path
+        if zenoh.mode != "client":  # made on the first start, as the key and admin secret (a router reads it too)
+            for user in add_missing_users(users_path, sorted(access.roles)):
+                log.info("made a password for user %s in %s", user, users_path)
+        users = read_users_file(users_path)
         extra: dict[str, Any] = {}
         if zenoh.mode == "client":  # behind a router, which holds the ACL: the server is its user "server"
             if SERVER_USER not in users:
@@ -134,7 +143,7 @@ class MatchServer:
             missing = sorted(set(access.roles) - set(users))
             if missing:
                 raise ValueError(f"access.roles: users {missing} have no password in access.users_file")
-            extra["transport/auth/usrpwd/dictionary_file"] = str(Path(access.users_file))
+            extra["transport/auth/usrpwd/dictionary_file"] = str(users_path)
             extra["access_control"] = acl_config(self.settings.name, access.roles)
         return extra
 
@@ -191,6 +200,9 @@ class MatchServer:
         apply (config names, bounds, quotas)."""
         match_id = check_name("id", match_id) if match_id is not None else secrets.token_hex(4)
         limits = self.settings.limits
+        if options.seats and not self.settings.access.enabled:
+            raise ValueError("seats: need authenticated users (an access section: Zenoh users and access control); "
+                             "without them anyone may claim a seat's user name. Use tickets instead")
         if creator is not None:
             limits.check_config_name(options.config)
             limits.check_options(options)
@@ -322,10 +334,16 @@ class MatchServer:
             raise ValueError(f"op {op!r}: user {user!r} is a spectator on this server")
         if op == "create":
             self._check_admin(op, user, role, proves, allow_players=access.create == "player")
-            fields = {k: v for k, v in args.items() if k != "id"}
-            runner = self.create(MatchOptions.from_dict(fields, self.settings.match_defaults), args.get("id"),
-                                 creator=user)
-            return {**runner.inspect(), "tickets": runner.tickets}
+            fields = {k: v for k, v in args.items() if k not in ("id", "client_key")}
+            options = MatchOptions.from_dict(fields, self.settings.match_defaults)
+            match_id = check_name("id", args["id"]) if args.get("id") is not None else secrets.token_hex(4)
+            # the tickets are sealed to the creator's one-use key (covered by the request's MAC): whoever else
+            # gets this signed reply, a relay that resent the request included, reads none
+            exchange = KeyExchange()
+            key = exchange.tickets_key(args.get("client_key"), request["nonce"], self.settings.name, match_id)
+            runner = self.create(options, match_id, creator=user)
+            return {**runner.inspect(), "creator_role": role, "server_key_exchange": exchange.public_bytes,
+                    "tickets_sealed": seal_secret(key, pack_value(runner.tickets))}
         if op == "stop":
             runner = self.match(args.get("match"))
             own = access.create == "player" and access.enabled and runner.creator == user

@@ -182,8 +182,9 @@ class MatchRunner:
                 action_spec = _spec(args["action"], "action")
                 action_parser = make_action_parser(action_spec["name"],
                                                    **{k: v for k, v in action_spec.items() if k != "name"})
-            secret = exchange.slot_secret(args.get("client_key"), request.nonce, self.keys.server, self.id, slot.name)
-            slot.take(name, request.user, secret)
+            secret, rejoin_key = exchange.slot_keys(args.get("client_key"), request.nonce, self.keys.server, self.id,
+                                                    slot.name)
+            slot.take(name, request.user, secret, rejoin_key)
             slot.obs_spec, slot.action_spec = obs_spec, action_spec
             slot.obs_builder, slot.action_parser = obs_builder, action_parser
             slot.with_state = bool(args.get("with_state", True))
@@ -211,21 +212,27 @@ class MatchRunner:
             raise ValueError(f"slot: {wanted!r} is not a slot of match {self.id!r}; slots: {list(self.slots)}")
         return wanted
 
-    def _own_slot(self, request: JoinRequest) -> Slot:
-        """The slot a rejoin or leave names, if the request proves its secret (and comes from its user)."""
+    def _own_slot(self, request: JoinRequest, rejoin: bool = False) -> Slot:
+        """The slot a leave (or, ``rejoin``, a rejoin) names, if the request proves the slot's secret (its rejoin
+        key) and comes from its user."""
         slot = self.slots[self._slot_arg(request.args)]
-        if slot.secret is None or slot.left or slot.user != request.user or not request.proves(slot.secret):
-            raise ValueError(f"slot: this request does not prove the secret of slot {slot.name!r} of match "
-                             f"{self.id!r} (for user {request.user!r})")
+        key = slot.rejoin_key if rejoin else slot.secret
+        if slot.secret is None or slot.left or slot.user != request.user or key is None or not request.proves(key):
+            raise ValueError(f"slot: this request does not prove the {'rejoin key' if rejoin else 'secret'} of slot "
+                             f"{slot.name!r} of match {self.id!r} (for user {request.user!r})")
         return slot
 
     def rejoin(self, request: JoinRequest) -> dict:
-        """A bot back after a crash: same slot, same secret, a new lease for its new liveliness token."""
+        """A bot back after a crash: same slot, new keys from a new exchange (the old ones stop working), a new
+        lease for its new liveliness token."""
+        exchange = KeyExchange()
         with self._cond:
-            slot = self._own_slot(request)
+            slot = self._own_slot(request, rejoin=True)
+            slot.secret, slot.rejoin_key = exchange.slot_keys(request.args.get("client_key"), request.nonce,
+                                                              self.keys.server, self.id, slot.name)
             slot.new_lease()
             self._cond.notify_all()
-            return self._join_reply(slot)
+            return {**self._join_reply(slot), "server_key_exchange": exchange.public_bytes}
 
     def _join_reply(self, slot: Slot) -> dict:
         rules = self.env.rules
@@ -252,7 +259,7 @@ class MatchRunner:
                 slot.release()
                 self._act_subs.pop(slot.name).undeclare()
             else:  # mid-match the seat stays, played by replacement actions; the secret stops working
-                slot.left, slot.secret, slot.alive = True, None, False
+                slot.left, slot.secret, slot.rejoin_key, slot.alive = True, None, None, False
             self._cond.notify_all()
             return {"match": self.id, "slot": slot.name}
 

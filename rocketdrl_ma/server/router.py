@@ -54,11 +54,11 @@ class RouterSettings:
         if self.serves is None or not self.serves.access.enabled:
             return {}
         access = self.serves.access
-        users = read_users_file(access.users_file)
+        users = read_users_file(self.serves.users_path)
         missing = sorted({SERVER_USER, *access.roles} - set(users))
         if missing:
             raise ValueError(f"access.users_file: users {missing} have no password")
-        return {"transport/auth/usrpwd/dictionary_file": str(Path(access.users_file)),
+        return {"transport/auth/usrpwd/dictionary_file": str(self.serves.users_path),
                 "access_control": acl_config(self.serves.name, access.roles, router=True)}
 
 

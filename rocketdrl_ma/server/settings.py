@@ -37,6 +37,8 @@ MATCH_MODES = ("lockstep", "realtime")
 REPLACEMENTS = ("repeat", "neutral")
 ROLES = ("admin", "player", "spectator")
 SERVER_USER = "server"  # the match server's own Zenoh user when it is a client of a router
+LOCAL_USER = "local"  # who a client on the server's machine authenticates as unless it names a user
+USERS_FILE = "users.txt"  # in the key dir unless access.users_file names another
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 DEFAULT_USER = "guest"  # a client without Zenoh authentication (loopback): just a name, proves nothing
 _SECURE_PROTOCOLS = ("tls", "quic")
@@ -204,16 +206,19 @@ class ZenohSettings:
 class AccessSettings:
     """Who may connect, and what each user may do.
 
-    ``users_file``: Zenoh's user/password dictionary (``user:password`` lines; ``rocketdrl-ma keys`` writes
-    it with random passwords). With it, Zenoh authenticates every connection and the server generates
+    ``users_file``: Zenoh's user/password dictionary (``user:password`` lines; default ``<key_dir>/users.txt``).
+    The server (in peer mode) adds a random password for every user of ``roles`` it lacks when it starts,
+    in a file readable by its owner only, as it makes its key; ``rocketdrl-ma keys`` does the same and writes
+    client YAMLs. With users, Zenoh authenticates every connection and the server generates
     Zenoh access-control rules (default deny) from ``roles``: each user may use only its own key prefix
     ``rocketdrl/<server>/u/<user>/**`` (its lobby, its slots), read the public state and events, and
     fetch the server's key; ``admin`` users may also invite league entrants. ``roles``: user -> ``admin``
     (create and stop matches, with the admin secret as well), ``player`` (join matches) or ``spectator``
     (watch). ``create``: the role that may create matches (``admin``, or ``player`` to let players create
     their own, within the per-user limit). The user ``server`` is the server itself (router set-up).
-    Without ``users_file`` nobody is authenticated: every client is a ``player`` by the name it claims
-    (fit for loopback only; admin ops still need the admin secret).
+    Without ``roles`` and ``users_file`` nobody is authenticated (the open mode, ``server/open.yaml``): every
+    client is a ``player`` by the name it claims (demos on loopback only; admin ops still need the admin
+    secret; seats are refused).
     """
     users_file: str | None = None
     roles: dict = field(default_factory=dict)
@@ -234,15 +239,12 @@ class AccessSettings:
                 raise ValueError(f"access.roles.{user}: {role!r} is not one of {list(ROLES)}")
         if d.get("create", "admin") not in ("admin", "player"):
             raise ValueError(f"access.create: {d['create']!r} is not one of ['admin', 'player']")
-        if roles and d.get("users_file") is None:
-            raise ValueError("access.users_file: roles need authenticated users: name the user:password file "
-                             "(`rocketdrl-ma keys` writes it)")
         d["roles"] = roles
         return cls(**d)
 
     @property
     def enabled(self) -> bool:
-        return self.users_file is not None
+        return self.users_file is not None or bool(self.roles)
 
     def role(self, user: str) -> str | None:
         """The user's role; without authentication everyone is a player."""
@@ -490,6 +492,11 @@ class ServerSettings:
     def keys_path(self) -> Path:
         return Path(self.key_dir if self.key_dir is not None else f"runs/server/{self.name}")
 
+    @property
+    def users_path(self) -> Path:
+        """The Zenoh users' passwords (``access.users_file``, default ``<key_dir>/users.txt``)."""
+        return Path(self.access.users_file) if self.access.users_file else self.keys_path / USERS_FILE
+
     @classmethod
     def load(cls, path: str | Path) -> "ServerSettings":
         return cls.from_dict(_load_yaml(path, "server config"))
@@ -524,8 +531,11 @@ class ClientSettings:
     """How a bot, spectator or lobby client reaches a server and knows it is the real one.
 
     ``server``: the server's name. ``zenoh``: a client session (default: loopback ``tcp/127.0.0.1:7447``).
-    ``user``: the client's user in key expressions (default: ``zenoh.auth.user``, else ``guest``); with
-    Zenoh authentication it must be the authenticated user. ``server_key``: the server's public key
+    ``user``: the client's user in key expressions (default: ``zenoh.auth.user``, else ``local`` when the
+    server's folder holds its password, else ``guest``); with Zenoh authentication it must be the
+    authenticated user. Without ``zenoh.auth``, a client on the server's machine authenticates with the
+    password of its user (default ``local``) in ``<key_dir>/users.txt`` if it may read that file
+    (``credentials_from`` then names it), as it finds the server's key there. ``server_key``: the server's public key
     (``ed25519:...``, printed by ``rocketdrl-ma serve``) to pin; without it the client uses
     ``<key_dir>/server.pub`` if that exists (same machine and folder as the server), else the key
     remembered in the known-servers file, else, with ``trust_on_first_use``, the one key the server
@@ -546,6 +556,7 @@ class ClientSettings:
     trust_on_first_use: bool = True
     known_servers: str | None = None
     inspect_retry_s: float = 30.0
+    credentials_from: str | None = None
 
     @classmethod
     def from_dict(cls, d: dict) -> "ClientSettings":
@@ -559,7 +570,7 @@ class ClientSettings:
         if d.get("server_key") is not None:
             from .crypto import parse_public_key
             parse_public_key(d["server_key"])
-        for key in ("key_dir", "admin_secret_file", "known_servers"):
+        for key in ("key_dir", "admin_secret_file", "known_servers", "credentials_from"):
             if d.get(key) is not None and not isinstance(d[key], str):
                 raise ValueError(f"{key}: expected a path, got {d[key]!r}")
         if d.get("admin_secret") is not None:
@@ -579,7 +590,24 @@ class ClientSettings:
         if auth_user is not None and settings.user is not None and auth_user != settings.user:
             raise ValueError(f"user: {settings.user!r} differs from zenoh.auth.user {auth_user!r}; the server "
                              "knows a client by its authenticated user")
+        if not settings.zenoh.auth and settings.credentials_from is None:
+            settings = settings._with_local_credentials()
         return settings
+
+    def _with_local_credentials(self) -> "ClientSettings":
+        """With the password of its user from the server's folder, if that file is there and readable."""
+        path = self.keys_path / USERS_FILE
+        try:
+            lines = path.read_text().splitlines()
+        except OSError:  # no server in this folder, or another OS user's: no credentials
+            return self
+        user = self.user or LOCAL_USER
+        for line in lines:
+            name, sep, password = line.partition(":")
+            if sep and name == user and password:
+                return replace(self, zenoh=replace(self.zenoh, auth={"user": user, "password": password}),
+                               credentials_from=str(path))
+        return self
 
     @classmethod
     def load(cls, path: str | Path, **overrides: Any) -> "ClientSettings":
@@ -587,7 +615,11 @@ class ClientSettings:
         return cls.from_dict({**raw, **{k: v for k, v in overrides.items() if v is not None}})
 
     def replace(self, **changes: Any) -> "ClientSettings":
-        return ClientSettings.from_dict({**{f.name: getattr(self, f.name) for f in fields(self)}, **changes})
+        current = {f.name: getattr(self, f.name) for f in fields(self)}
+        if self.credentials_from is not None and "zenoh" not in changes and \
+                {"user", "key_dir", "server"} & {k for k, v in changes.items() if v is not None}:
+            current.update(zenoh=replace(self.zenoh, auth={}), credentials_from=None)  # found again for the change
+        return ClientSettings.from_dict({**current, **changes})
 
     @property
     def user_name(self) -> str:

@@ -28,6 +28,7 @@ class Slot:
     bot: str | None = None  # the entrant's name
     user: str | None = None  # the player's user: its keys live under rocketdrl/<server>/u/<user>
     secret: bytes | None = None  # agreed at the join (X25519); keys every action's MAC
+    rejoin_key: bytes | None = None  # agreed with it: what a rejoin proves (never the action key)
     ticket: bytes | None = None  # needed to join this slot unless the match is open or the slot a seat
     seat: str | None = None  # the only user who may join this slot
     lease: str | None = None  # public id of the current connection's liveliness token
@@ -46,8 +47,9 @@ class Slot:
     counts: dict = field(default_factory=lambda: dict.fromkeys(
         ("received", "missed", "disconnected", "late", "invalid"), 0))
 
-    def take(self, bot: str, user: str, secret: bytes) -> None:
+    def take(self, bot: str, user: str, secret: bytes, rejoin_key: bytes) -> None:
         self.occupant, self.bot, self.user, self.secret, self.left = "remote", bot, user, secret, False
+        self.rejoin_key = rejoin_key
         self.new_lease()
 
     def new_lease(self) -> None:
@@ -57,6 +59,7 @@ class Slot:
 
     def release(self) -> None:
         self.occupant, self.bot, self.user, self.secret, self.lease, self.alive = "open", None, None, None, None, False
+        self.rejoin_key = None
         self.obs_spec = self.action_spec = self.obs_builder = self.action_parser = None
 
     def heard(self) -> None:

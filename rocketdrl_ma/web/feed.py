@@ -18,7 +18,7 @@ from rocketdrl_ma.rules.state import GameState
 from rocketdrl_ma.server.client import LobbyClient, SealedStream, ServerError, ServerGone
 from rocketdrl_ma.server.protocol import Keys, MatchStatus, ProtocolError, decode_events, decode_state, unpack
 from rocketdrl_ma.validation import check_name
-from rocketdrl_ma.server.settings import ZenohSettings
+from rocketdrl_ma.server.settings import ClientSettings
 
 from .training import TrainingKeys
 
@@ -129,11 +129,12 @@ class Follower:
 
 
 class SpectatorFeed:
-    """A Zenoh session that reads one match server's lobby list, its matches and the training runs."""
+    """A Zenoh session that reads one match server's lobby list, its matches and the training runs, as the
+    client ``client`` (its user and password, the server's key it trusts)."""
 
-    def __init__(self, zenoh: ZenohSettings, server: str = "local", lobby_timeout_s: float = 2.0):
-        self.settings, self.server = zenoh, check_name("server", server)
-        self.keys, self.training_keys = Keys(server), TrainingKeys(server)
+    def __init__(self, client: ClientSettings, lobby_timeout_s: float = 2.0):
+        self.client, self.settings, self.server = client, client.zenoh, client.server
+        self.keys, self.training_keys = Keys(self.server), TrainingKeys(self.server)
         self.lobby_timeout_s = lobby_timeout_s
         self.session = None
 
@@ -149,18 +150,21 @@ class SpectatorFeed:
     def matches(self) -> list[dict]:
         """The lobby's list (id, status, mode, config, score...); empty when no server answers."""
         try:
-            return LobbyClient(self.session, self.server, self.lobby_timeout_s).list()
+            return LobbyClient(self.session, self.client, self.lobby_timeout_s).list()
         except (ServerGone, ServerError):
             return []
 
     def training_runs(self) -> list[dict]:
-        """Training runs publishing evaluation episodes now (their liveliness tokens)."""
+        """Training runs publishing evaluation episodes now (their liveliness tokens): this client's user's by
+        their name, another user's as ``<user>.<run>``."""
         runs = []
         for reply in self.session.liveliness().get(self.training_keys.all_alive, timeout=self.lobby_timeout_s):
             if reply.ok is not None:
-                run = self.training_keys.parse_alive(str(reply.ok.key_expr))
-                if run is not None:
-                    runs.append({"id": run, "status": "training"})
+                found = self.training_keys.parse_alive(str(reply.ok.key_expr))
+                if found is not None:
+                    user, run = found
+                    run_id = run if user == self.client.user_name else f"{user}.{run}"
+                    runs.append({"id": run_id, "status": "training", "user": user})
         return sorted(runs, key=lambda r: r["id"])
 
     def follow(self, kind: str, source_id: Any) -> Follower:
@@ -173,11 +177,13 @@ class SpectatorFeed:
             # subscribed first, then asked: a match that ends in between still shows its end
             follower = Follower(self.session, self.keys.state(source_id), self.keys.events(source_id))
             try:  # a match the server does not know is an error now, not a page that waits forever
-                lobby = LobbyClient(self.session, self.server, self.lobby_timeout_s)
+                lobby = LobbyClient(self.session, self.client, self.lobby_timeout_s)
                 follower.info = lobby.inspect(source_id)
             except (ServerGone, ServerError) as e:
                 follower.close()
                 raise ValueError(str(e)) from None
             follower.opener = _sealed(lobby, follower.info)
             return follower
-        return Follower(self.session, self.training_keys.state(source_id), self.training_keys.events(source_id))
+        user, _, run = source_id.rpartition(".")
+        user = user or self.client.user_name
+        return Follower(self.session, self.training_keys.state(user, run), self.training_keys.events(user, run))

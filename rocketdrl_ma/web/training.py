@@ -2,15 +2,18 @@
 frozen copy: ``policies/ppo/checkpoint.ModelPolicy``) to ``TrainingBroadcast``, which plays one evaluation episode with it in a thread of its own and publishes it
 at real-time pace on Zenoh, where the page (``rocketdrl-ma web``) lists the run next to the live matches.
 
-Keys (``<server>`` as for the match server, ``<run>`` the run's name)::
+Keys (``<server>`` as for the match server, ``<user>`` the trainer's Zenoh user, ``<run>`` the run's name)::
 
-    rocketdrl/<server>/train/<run>/alive    liveliness token held while the run trains
-    rocketdrl/<server>/train/<run>/state    each decision of the episode: the match server's state message
-                                            plus ``info`` (run, iteration)
-    rocketdrl/<server>/train/<run>/events   events, and the episode's final message
+    rocketdrl/<server>/u/<user>/train/<run>/alive    liveliness token held while the run trains
+    rocketdrl/<server>/u/<user>/train/<run>/state    each decision of the episode: the match server's state
+                                                     message plus ``info`` (run, iteration)
+    rocketdrl/<server>/u/<user>/train/<run>/events   events, and the episode's final message
 
-The session is a peer that connects to the given endpoints (the match server's, by default) and listens on
-nothing; with no server up it keeps retrying in the background and training never waits for it. Each
+Under the trainer's own prefix: with the server's Zenoh users and access control only that user may publish
+there (every user may watch), so nobody else can show a run in its name. The session is a peer that connects to
+the given endpoints (the match server's, by default), authenticated like a client on the server's machine (the
+password of user ``local``, or of the client's user, from the server's folder), and listens on nothing; with no
+server up it keeps retrying in the background and training never waits for it. Each
 episode is also kept as a replay (``<replay_dir>/iter_<N>.npz``) the page can open later.
 """
 from __future__ import annotations
@@ -24,7 +27,7 @@ from typing import TYPE_CHECKING
 from rocketdrl_ma.policies.base import Policy
 from rocketdrl_ma.server.protocol import MatchStatus, encode_state, pack
 from rocketdrl_ma.validation import check_name
-from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ZenohSettings
+from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ClientSettings, ZenohSettings
 
 if TYPE_CHECKING:  # torch stays unimported until a training actually runs
     from rocketdrl_ma.policies.ppo.config import TrainConfig
@@ -36,23 +39,35 @@ class TrainingKeys:
     """The key expressions of the training runs of one server name (see the module docstring)."""
 
     def __init__(self, server: str):
-        self.root = f"rocketdrl/{check_name('server', server)}/train"
-        self.all_alive = f"{self.root}/*/alive"
+        self.server_root = f"rocketdrl/{check_name('server', server)}"
+        self.all_alive = f"{self.server_root}/u/*/train/*/alive"
 
-    def state(self, run: str) -> str:
-        return f"{self.root}/{run}/state"
+    def run_root(self, user: str, run: str) -> str:
+        return f"{self.server_root}/u/{user}/train/{run}"
 
-    def events(self, run: str) -> str:
-        return f"{self.root}/{run}/events"
+    def state(self, user: str, run: str) -> str:
+        return f"{self.run_root(user, run)}/state"
 
-    def alive(self, run: str) -> str:
-        return f"{self.root}/{run}/alive"
+    def events(self, user: str, run: str) -> str:
+        return f"{self.run_root(user, run)}/events"
 
-    def parse_alive(self, key: str) -> str | None:
-        prefix, suffix = self.root + "/", "/alive"
-        if key.startswith(prefix) and key.endswith(suffix) and "/" not in key[len(prefix):-len(suffix)]:
-            return key[len(prefix):-len(suffix)]
+    def alive(self, user: str, run: str) -> str:
+        return f"{self.run_root(user, run)}/alive"
+
+    def parse_alive(self, key: str) -> tuple[str, str] | None:
+        """``(user, run)`` of a run's liveliness key."""
+        parts = key.split("/")
+        if len(parts) == 7 and "/".join(parts[:2]) == self.server_root and parts[2] == "u" and parts[4] == "train" \
+                and parts[6] == "alive":
+            return parts[3], parts[5]
         return None
+
+
+def check_run(run: object) -> str:
+    """A run's name: a name without '.' (the page shows another user's run as ``<user>.<run>``)."""
+    if "." in check_name("run", run):
+        raise ValueError(f"run: {run!r} may not hold '.'")
+    return run
 
 
 class TrainingBroadcast:
@@ -65,20 +80,26 @@ class TrainingBroadcast:
 
     def __init__(self, env_config: str | dict, run: str, every: int, *, env_overrides: dict | None = None,
                  server: str = "local", connect: tuple[str, ...] | list[str] = (DEFAULT_ENDPOINT,),
-                 zenoh: ZenohSettings | None = None, replay_dir: str | Path | None = None, seed: int = 20_000,
+                 client: ClientSettings | None = None, replay_dir: str | Path | None = None, seed: int = 20_000,
                  speed: float = 1.0):
+        """``client``: the trainer's user, password and server (default: a client of ``server`` at ``connect``,
+        with the password of user ``local`` from the server's folder when it runs on this machine)."""
         if isinstance(every, bool) or not isinstance(every, int) or every < 1:
             raise ValueError(f"watch_every: expected an int >= 1 (iterations between episodes), got {every!r}")
         if not (isinstance(speed, (int, float)) and speed > 0):
             raise ValueError(f"speed: expected a number > 0, got {speed!r}")
         self.env_config, self.env_overrides = env_config, dict(env_overrides or {})
-        self.run, self.every, self.seed, self.speed = check_name("run", run), every, seed, float(speed)
-        self.keys = TrainingKeys(server)
+        self.run, self.every, self.seed, self.speed = check_run(run), every, seed, float(speed)
+        client = client or ClientSettings.from_dict({"server": server, "zenoh": ZenohSettings(
+            mode="client", connect=tuple(connect))})
+        self.user, self.keys = client.user_name, TrainingKeys(client.server)
         self.replay_dir = Path(replay_dir) if replay_dir is not None else None
-        self.settings = zenoh or ZenohSettings(mode="peer", listen=(), connect=tuple(connect))
+        # a peer: unlike a client, it opens with no server up and connects once one is
+        self.settings = ZenohSettings(mode="peer", listen=(), connect=client.zenoh.connect, tls=client.zenoh.tls,
+                                      auth=client.zenoh.auth)
         self.session = self.settings.open()
-        self._token = self.session.liveliness().declare_token(self.keys.alive(self.run))
-        self._state_pub = self.session.declare_publisher(self.keys.state(self.run), express=True)
+        self._token = self.session.liveliness().declare_token(self.keys.alive(self.user, self.run))
+        self._state_pub = self.session.declare_publisher(self.keys.state(self.user, self.run), express=True)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.published: list[int] = []  # iterations whose episode played to its end
@@ -129,7 +150,7 @@ class TrainingBroadcast:
             # The episode's end must reach the viewers (a page shows it from this message): unlike the per-decision
             # messages it may wait for a full queue, on this thread, never the trainer's.
             from zenoh import CongestionControl
-            self.session.put(self.keys.events(self.run),
+            self.session.put(self.keys.events(self.user, self.run),
                              pack({"match": self.run, "decision": decision, "final": True, "info": info,
                                    "status": MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED,
                                    "summary": env.rules.summary()}),
@@ -148,7 +169,7 @@ class TrainingBroadcast:
                                   "slots": slots, "state": encode_state(state)}))
         if state.events:
             events = [event.as_dict() for event in state.events]
-            self.session.put(self.keys.events(self.run), pack({**common, "events": events, "info": info}))
+            self.session.put(self.keys.events(self.user, self.run), pack({**common, "events": events, "info": info}))
 
     def close(self) -> None:
         self._stop.set()

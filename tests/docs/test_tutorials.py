@@ -125,7 +125,8 @@ def test_a_bot_written_from_the_protocol_page_plays_a_match(shell, tmp_path):
     server = shell.start(with_args(page.command("Terminal 1: the match server"), "--listen", endpoint))
     server.line("serving", 60)
     create, watch = page.commands("Terminal 2: create the match and watch it")
-    created = shell.run(with_args(create, "--connect", endpoint))
+    # the longest deadline: lockstep moves on once both actions are in, and this test counts every action on time
+    created = shell.run(with_args(create, "--connect", endpoint, "--deadline-ms", "2000"))
     tickets = dict(line.split()[1:3] for line in created.splitlines() if line.startswith("ticket "))
     assert sorted(tickets) == ["blue_0", "orange_0"], created
     watcher = shell.start(with_args(watch, "--connect", endpoint))

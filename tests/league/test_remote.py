@@ -1,5 +1,6 @@
 """A remote entrant: a `rocketdrl-ma league-bot` process plays its league matches through a real match
-server on loopback (Zenoh), and the results land in the league's store like local ones."""
+server on loopback (Zenoh, with users and access control, as server/local.yaml runs), and the results land in
+the league's store like local ones."""
 from __future__ import annotations
 
 import socket
@@ -15,7 +16,7 @@ from rocketdrl_ma.league.runner import run_league
 from rocketdrl_ma.league.schedule import schedule
 from rocketdrl_ma.results import ResultsStore
 from rocketdrl_ma.server.lobby import MatchServer
-from rocketdrl_ma.server.settings import ServerSettings
+from rocketdrl_ma.server.settings import ClientSettings, ServerSettings
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -29,12 +30,16 @@ def free_endpoint() -> str:
 @pytest.mark.slow
 def test_remote_bot_entrant_plays_through_the_server(tmp_path):
     endpoint = free_endpoint()
-    settings = ServerSettings.from_dict({"name": "leaguetest", "zenoh": {"mode": "peer", "listen": [endpoint]}})
+    key_dir = tmp_path / "keys"
+    settings = ServerSettings.from_dict({"name": "leaguetest", "zenoh": {"mode": "peer", "listen": [endpoint]},
+                                         "key_dir": str(key_dir),
+                                         "access": {"roles": {"local": "admin", "alice": "player"}}})
     server = MatchServer(settings, results_path=str(tmp_path / "server.sqlite")).start()
+    # alice's bot authenticates as alice (its password in the server's folder: the same machine here)
     bot = subprocess.Popen([sys.executable, "-m", "rocketdrl_ma.cli", "league-bot", "--entrant", "alice",
                             "--policy", "scripted:ball_chaser", "--server", "leaguetest", "--connect", endpoint,
-                            "--max-matches", "2"], cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                           text=True)
+                            "--key-dir", str(key_dir), "--max-matches", "2"], cwd=REPO, stdout=subprocess.PIPE,
+                           stderr=subprocess.STDOUT, text=True)
     try:
         cfg = validate_league_config({
             "name": "remote", "match": "matches/1v1.yaml", "results": str(tmp_path / "league.sqlite"),
@@ -43,7 +48,9 @@ def test_remote_bot_entrant_plays_through_the_server(tmp_path):
             "server": {"name": "leaguetest", "connect": [endpoint], "join_timeout_s": 60},
             "entrants": [{"name": "alice", "remote": True}, {"name": "idle", "policy": "scripted:idle"}]})
         # the bot process may still be starting: the first invitation waits for its queryable
-        run = run_league(cfg)
+        league = ClientSettings.from_dict({"server": "leaguetest", "key_dir": str(key_dir),
+                                           "zenoh": {"mode": "client", "connect": [endpoint]}})
+        run = run_league(cfg, client=league)
         assert run.played == 2
         out, _ = bot.communicate(timeout=60)
         assert bot.returncode == 0, out

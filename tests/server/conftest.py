@@ -29,6 +29,15 @@ def running(tmp_path):
 
 
 @pytest.fixture
+def authed(tmp_path):
+    """A loopback server with Zenoh users and access control (local: admin; alice, bob: players), as
+    server/local.yaml runs: the passwords in its folder, where its clients find them."""
+    r = Running(tmp_path, access={"roles": {"local": "admin", "alice": "player", "bob": "player"}})
+    yield r
+    r.close()
+
+
+@pytest.fixture
 def procs():
     p = Procs()
     yield p

@@ -66,12 +66,21 @@ class Running:
         self.client_settings = client_settings(self.endpoint, name, self.key_dir)
         self.session = self.client_settings.zenoh.open()
         self.lobby = LobbyClient(self.session, self.client_settings)
+        self._sessions: list = []
 
     def client(self, **extra) -> ClientSettings:
         return self.client_settings.replace(**extra)
 
+    def lobby_as(self, user: str) -> LobbyClient:
+        """A lobby client of ``user`` on a session of its own (with Zenoh users, its own authentication)."""
+        client = self.client(user=user)
+        session = client.zenoh.open()
+        self._sessions.append(session)
+        return LobbyClient(session, client)
+
     def close(self) -> None:
-        self.session.close()
+        for session in [*self._sessions, self.session]:
+            session.close()
         self.server.close()
 
     def wait_status(self, match: str, statuses=("finished",), timeout_s: float = 60.0) -> dict:

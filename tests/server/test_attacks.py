@@ -21,10 +21,10 @@ import sys
 import threading
 
 import pytest
-from server_helpers import HOSTILE, SHORT, Secure, wait_for
+from server_helpers import HOSTILE, SHORT, Running, Secure, wait_for
 
 from rocketdrl_ma.results import ResultsStore
-from rocketdrl_ma.server import PolicyBot, ServerError, Spectator
+from rocketdrl_ma.server import PolicyBot, ServerError, ServerGone, Spectator
 from rocketdrl_ma.server.client import LobbyClient, trusted_server_key
 from rocketdrl_ma.server.spectator import MatchEnd, StateUpdate
 
@@ -279,3 +279,135 @@ def test_a_forged_lobby_reply_never_seats_a_bot(running):
         fake2.undeclare()
     finally:
         fake.undeclare()
+
+
+# ---------------------------------------------------------------------------------------------- issue 50
+# Each attack by ``hostile_lobby.py`` (msgpack, zenoh and cryptography only), against the default
+# configuration (`serve server/local.yaml`: authenticated on loopback), the open demo mode where it still
+# applies, and the secure recipe.
+HOSTILE_LOBBY = HOSTILE.with_name("hostile_lobby.py")
+
+
+def lobby_attack(procs, attack: str, server: str, endpoint: str | None, *extra: str):
+    """The hostile process once ready (None if it could not even connect), and its result if it could not."""
+    where = ["--connect", endpoint] if endpoint else []
+    p = procs.start([sys.executable, str(HOSTILE_LOBBY), attack, "--server", server, *where, *extra])
+    first = p.line("", 60)
+    if first.startswith("result "):
+        return p, json.loads(first.split(" ", 1)[1])
+    assert first == "ready", p.output()
+    return p, None
+
+
+def attack_result(p, timeout_s: float = 120) -> dict:
+    assert p.wait(timeout_s) == 0, p.output()
+    return json.loads(p.line("result ").split(" ", 1)[1])
+
+
+def test_the_default_local_server_lets_no_unauthenticated_process_in(procs, tmp_path):
+    """`serve server/local.yaml` authenticates every Zenoh connection: a local process without the password
+    in the server's folder cannot connect, so it sees no lobby query to relay, answers no invitation, claims
+    no seat; the local clients find their credentials beside the server's key and work as before."""
+    served = procs.serve(tmp_path)
+    hostile, refused = lobby_attack(procs, "relay", served.name, served.endpoint, "--victim", "local", "--wait-s", "5")
+    assert refused is not None and refused["connected"] is False, attack_result(hostile)
+    assert (served.key_dir / "users.txt").stat().st_mode & 0o077 == 0
+    session = served.client_settings.zenoh.open()
+    try:
+        lobby = LobbyClient(session, served.client_settings)
+        created = lobby.create("matches/1v1.yaml", "m", ready_timeout_s=60, fill="idle")
+        assert created["creator"] == "local" and lobby.list()[0]["id"] == "m"
+    finally:
+        session.close()
+
+
+def test_a_relayed_create_gives_the_relay_no_ticket(procs, tmp_path):
+    """The open demo mode: anyone on loopback may listen on the admin's lobby key, empty its rate limit and
+    resend its `create` byte for byte. The tickets in the reply are sealed to the admin's one-use key, so the
+    relay reads none and joins no slot."""
+    # one token every 2 s: the admin's challenge takes it, its create right after finds none, and a token frees
+    # for the relay's copy 2 s later, however loaded the machine
+    r = Running(tmp_path, match_defaults={"open": False}, limits={"requests_per_s": 0.5, "request_burst": 1})
+    try:
+        hostile, _ = lobby_attack(procs, "relay", "test", r.endpoint, "--victim", "guest", "--refill-s", "2.5")
+        probe = "rocketdrl/test/u/guest/probe"  # the relay's queryables reached the admin's session
+        wait_for(lambda: any(reply.ok is not None for reply in r.session.get(probe, timeout=1.0)), 30, "the relay")
+        with pytest.raises((ServerGone, ServerError)):  # its create is rate limited (or refused as replayed)
+            r.lobby.create("matches/1v1.yaml", "stolen", ready_timeout_s=60, fill="idle")
+        got = attack_result(hostile)
+        assert got["saw"] == ["challenge", "create"] and got["replayed_ok"], got  # the server took the copy...
+        assert got["readable_tickets"] == [] and got["joined_with_stolen_tickets"] == [], got  # ...and sealed them
+    finally:
+        r.close()
+
+
+def test_seats_need_authenticated_users(running, procs):
+    """Without Zenoh users a seat would go to whoever claims the user's name: the open mode refuses seats."""
+    with pytest.raises(ServerError, match="seats: need authenticated users"):
+        running.lobby.create("matches/1v1.yaml", "seated", ready_timeout_s=60, seats={"blue_0": "alice"})
+    hostile, _ = lobby_attack(procs, "seat", "test", running.endpoint, "--victim", "alice", "--match", "seated")
+    assert attack_result(hostile)["joined"] is False
+
+
+def test_an_unsigned_invitation_never_makes_a_league_bot_play(running, procs):
+    """A league bot plays only invitations the server signed for its own seats: a forged one naming an open
+    match is refused, and nothing is played or counted."""
+    from rocketdrl_ma.league.remote import serve_invitations
+    running.lobby.create("matches/1v1.yaml", "bait", ready_timeout_s=60, open=True, fill="idle", overrides=SHORT)
+    stop, played = threading.Event(), []
+    bot = threading.Thread(target=lambda: played.append(serve_invitations(
+        running.session, "test", "alice", lambda: PolicyBot("scripted:ball_chaser"), max_matches=1, stop=stop,
+        client=running.client(user="alice"))))
+    bot.start()
+    try:
+        for _ in range(10):  # until the bot's queryable is declared
+            got = attack_result(lobby_attack(procs, "invite", "test", running.endpoint, "--victim", "alice",
+                                             "--match", "bait")[0])
+            if got["answers"]:
+                break
+        assert got["answers"] == 1 and got["accepted"] == 0, got
+    finally:
+        stop.set()
+        bot.join(60)
+    assert played == [0]
+    assert running.lobby.inspect("bait")["joined"] == 0
+
+
+def test_nobody_else_plays_a_league_entrants_seats(secure, procs, tmp_path):
+    """The secure recipe: mallory may neither answer alice's invitations (access control) nor join her
+    seats; the league stores nothing without alice's own bot."""
+    from rocketdrl_ma.league.config import validate_league_config
+    from rocketdrl_ma.league.runner import run_league
+    hostile, refused = lobby_attack(procs, "answer-invite", "lab", None, "--config", secure.client_file("mallory"),
+                                    "--victim", "alice", "--wait-s", "60")
+    assert refused is None, refused
+    cfg = validate_league_config({
+        "name": "steal", "match": "matches/1v1.yaml", "results": str(tmp_path / "league.sqlite"),
+        "overrides": SHORT, "format": "per_pair", "matches_per_pair": 1,
+        "server": {"name": "lab", "connect": [secure.endpoint], "join_timeout_s": 3},
+        "entrants": [{"name": "alice", "remote": True}, {"name": "idle", "policy": "scripted:idle"}]})
+    with pytest.raises(RuntimeError, match="no bot answered"):
+        run_league(cfg, client=secure.client("ops"))
+    hostile.popen.terminate()
+    assert ResultsStore(cfg.results).results() == []
+
+
+def test_only_a_users_own_training_runs_show_in_its_name(secure, procs):
+    """Training broadcasts live under their trainer's prefix, which the access control lets only that user
+    publish on: mallory's forged runs (the old shared `train/**`, or under alice's prefix) never show, alice's
+    own run does, as `alice.<run>` to the web user."""
+    from rocketdrl_ma.web.feed import SpectatorFeed
+    from rocketdrl_ma.web.training import TrainingBroadcast
+    hostile, refused = lobby_attack(procs, "train", "lab", None, "--config", secure.client_file("mallory"),
+                                    "--victim", "alice", "--match", "fake")
+    assert refused is None, refused
+    broadcast = TrainingBroadcast("matches/1v1.yaml", "real", every=1, client=secure.client("alice"))
+    feed = SpectatorFeed(secure.client("web")).open()
+    try:
+        runs = wait_for(lambda: feed.training_runs(), 20, "alice's run in the list")
+        assert [r["id"] for r in runs] == ["alice.real"]
+    finally:
+        feed.close()
+        broadcast.close()
+        hostile.popen.terminate()
+    assert attack_result(hostile)["sent"] > 0

@@ -3,6 +3,8 @@ scoreboard, replay and video), and two ``bot`` processes: a scripted bot and a c
 real PPO run, playing through the Bot SDK. The match's result lands in the server's results store."""
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from server_helpers import cli
@@ -42,17 +44,22 @@ def test_serve_lobby_watch_and_bots_as_commands(procs, tmp_path, checkpoint):
                              *client))
     assert create.wait(60) == 0, create.output()
     assert create.line("created match M (lockstep, slots ['blue_0', 'orange_0'])")
-    tickets = {line.split()[1]: line.split()[2] for line in create.lines if line.startswith("ticket ")}
-    assert set(tickets) == {"blue_0", "orange_0"}  # server/local.yaml: a slot needs its ticket
+    # server/local.yaml: a slot needs its ticket; they are in a private file, printed only when asked
+    assert not any(line.startswith("ticket ") for line in create.lines)
+    tickets_file = Path(create.line("tickets in ").split()[2])
+    assert tickets_file == served.key_dir / "tickets" / "M.txt" and tickets_file.stat().st_mode & 0o077 == 0
+    tickets = dict(line.split() for line in tickets_file.read_text().splitlines())
+    assert set(tickets) == {"blue_0", "orange_0"}
     video, replay = tmp_path / "match.mp4", tmp_path / "match.npz"
     watch = procs.start(cli("watch", "M", "--video", str(video), "--replay", str(replay), "--timeout", "300",
                             *client))
     watch.line("watching match M", 60)
     blue = procs.start(cli("bot", "--policy", "scripted:ball_chaser", "--match", "M", "--slot", "blue_0",
-                           "--ticket", tickets["blue_0"], *client))
+                           "--ticket", str(tickets_file), *client))
     orange = procs.start(cli("bot", "--policy", f"checkpoint:{checkpoint}", "--name", "tiny-ppo", "--match", "M",
                              "--ticket", tickets["orange_0"], *client))  # the slot its ticket opens: orange_0
-    assert orange.line("joined match M as orange_0")
+    rejoin_file = Path(orange.line("joined match M as orange_0").split("--rejoin ")[1])
+    assert rejoin_file.stat().st_mode & 0o077 == 0 and rejoin_file.read_text().startswith("orange_0:")
     for bot in (blue, orange):
         assert bot.wait(120) == 0, bot.output()
         assert bot.line("match M finished: blue ")

@@ -150,15 +150,22 @@ def test_joining_slots_secrets_and_requested_formats(running):
         lobby.join("m", "purple_0")
     with pytest.raises(ServerError, match="unknown observation builder 'eyes'"):
         lobby.join("m", observation="eyes")
-    again = lobby.rejoin("m", "blue_0", first.secret)  # a reconnect keeps the slot and secret, with a new lease
-    assert (again.slot, again.secret) == ("blue_0", first.secret) and again.lease != first.lease
-    with pytest.raises(ServerError, match="does not prove the secret of slot 'blue_0'"):
-        lobby.rejoin("m", "blue_0", random_bytes(32))
-    with pytest.raises(ServerError, match="does not prove the secret of slot 'orange_1'"):
-        lobby.rejoin("m", "orange_1", first.secret)  # a secret works for its own slot only
+    # a reconnect proves the rejoin key (not the action key) and gets new keys and a new lease
+    with pytest.raises(ServerError, match="does not prove the rejoin key of slot 'blue_0'"):
+        lobby.rejoin("m", "blue_0", first.secret)
+    again = lobby.rejoin("m", "blue_0", first.rejoin_key)
+    assert again.slot == "blue_0" and again.lease != first.lease and first.rejoin_key != first.secret
+    assert {again.secret, again.rejoin_key}.isdisjoint({first.secret, first.rejoin_key})
+    with pytest.raises(ServerError, match="does not prove the rejoin key of slot 'blue_0'"):
+        lobby.rejoin("m", "blue_0", first.rejoin_key)  # the old keys stopped working
+    with pytest.raises(ServerError, match="does not prove the rejoin key of slot 'orange_1'"):
+        lobby.rejoin("m", "orange_1", again.rejoin_key)  # a key works for its own slot only
     other_user = LobbyClient(running.session, running.client(user="mallory"))
     with pytest.raises(ServerError, match="for user 'mallory'"):
-        other_user.rejoin("m", "blue_0", first.secret)  # and for its own user only
+        other_user.rejoin("m", "blue_0", again.rejoin_key)  # and for its own user only
+    with pytest.raises(ServerError, match="does not prove the secret of slot 'blue_0'"):
+        lobby.leave("m", "blue_0", first.secret)
+    first = again
     lobby.leave("m", "blue_0", first.secret)
     assert lobby.inspect("m")["slot_status"]["blue_0"]["occupant"] == "open"
     lobby.join("m"), lobby.join("m"), lobby.join("m")
@@ -166,14 +173,15 @@ def test_joining_slots_secrets_and_requested_formats(running):
         lobby.join("m")
 
 
-def test_tickets_and_seats_decide_who_joins(running):
+def test_tickets_and_seats_decide_who_joins(authed):
+    running = authed  # seats need authenticated users
     lobby = running.lobby
     reply = lobby.create("matches/2v2.yaml", "t", ready_timeout_s=60, open=False, seats={"orange_1": "bob"})
     tickets = reply["tickets"]
     assert set(tickets) == {"blue_0", "blue_1", "orange_0"}  # the seat needs no ticket
     with pytest.raises(ServerError, match="reserved: join with its ticket"):
         lobby.join("t", "blue_0")
-    with pytest.raises(ServerError, match="no open slot for user 'guest'; its slots need a ticket or a seat"):
+    with pytest.raises(ServerError, match="no open slot for user 'local'; its slots need a ticket or a seat"):
         lobby.join("t")
     with pytest.raises(ServerError, match="reserved"):
         lobby.join("t", "blue_0", ticket=tickets["blue_1"])  # a ticket opens its own slot only
@@ -183,11 +191,11 @@ def test_tickets_and_seats_decide_who_joins(running):
         lobby.join("t", "blue_0", ticket=tickets["blue_0"])  # used
     with pytest.raises(ServerError, match="user 'bob''s seat"):
         lobby.join("t", "orange_1")
-    bob = LobbyClient(running.session, running.client(user="bob"))
+    bob = running.lobby_as("bob")
     seat = bob.join("t")
     assert seat.slot == "orange_1" and seat.keys["obs"].startswith("rocketdrl/test/u/bob/")
     info = lobby.inspect("t")
-    assert info["slot_status"]["orange_1"]["seat"] == "bob" and info["slot_status"]["blue_0"]["user"] == "guest"
+    assert info["slot_status"]["orange_1"]["seat"] == "bob" and info["slot_status"]["blue_0"]["user"] == "local"
     assert "tickets" not in info  # only the creator's create reply holds them
 
 

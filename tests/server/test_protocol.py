@@ -14,7 +14,7 @@ from rocketdrl_ma.physics import PRESETS
 from rocketdrl_ma.rules.events import Touch
 from rocketdrl_ma.rules.state import Obstacle
 from rocketdrl_ma.server.crypto import (KeyExchange, ServerIdentity, ServerKey, SignatureError, action_mac,
-                                        parse_public_key, random_bytes, request_mac)
+                                        open_secret, parse_public_key, random_bytes, request_mac, seal_secret)
 from rocketdrl_ma.server.protocol import (PROTOCOL_VERSION, Keys, ProtocolError, VersionError, action_message,
                                           check_name, decode_space, decode_state, encode_space, encode_state,
                                           open_sealed, pack, pack_map, pack_value, seal, split_action, unpack)
@@ -207,15 +207,25 @@ def test_action_mac_covers_match_slot_decision_and_action():
         request_mac(secret, "join", "lab", "bob", b"c" * 16, b"\x80")  # bound to the asking user
 
 
-def test_both_sides_derive_the_same_slot_secret_and_nobody_else_can():
+def test_both_sides_derive_the_same_slot_keys_and_nobody_else_can():
     bot, server, eve = KeyExchange(), KeyExchange(), KeyExchange()
     nonce = random_bytes()
-    ours = bot.slot_secret(server.public_bytes, nonce, "lab", "m1", "blue_0")
-    assert ours == server.slot_secret(bot.public_bytes, nonce, "lab", "m1", "blue_0") and len(ours) == 32
-    # someone who saw both public keys (and the nonce) but holds neither private key gets another secret
-    assert eve.slot_secret(server.public_bytes, nonce, "lab", "m1", "blue_0") != ours
-    assert server.slot_secret(bot.public_bytes, nonce, "lab", "m1", "orange_0") != ours  # bound to the slot
+    ours, rejoin_key = bot.slot_keys(server.public_bytes, nonce, "lab", "m1", "blue_0")
+    assert (ours, rejoin_key) == server.slot_keys(bot.public_bytes, nonce, "lab", "m1", "blue_0")
+    assert len(ours) == len(rejoin_key) == 32 and ours != rejoin_key  # a rejoin token never signs an action
+    # someone who saw both public keys (and the nonce) but holds neither private key gets other keys
+    assert eve.slot_keys(server.public_bytes, nonce, "lab", "m1", "blue_0")[0] != ours
+    assert server.slot_keys(bot.public_bytes, nonce, "lab", "m1", "orange_0")[0] != ours  # bound to the slot
     with pytest.raises(ValueError, match="client_key"):
-        server.slot_secret(bytes(32), nonce, "lab", "m1", "blue_0")  # a low-order point gives no secret
+        server.slot_keys(bytes(32), nonce, "lab", "m1", "blue_0")  # a low-order point gives no secret
     with pytest.raises(ValueError, match="client_key"):
-        server.slot_secret(b"short", nonce, "lab", "m1", "blue_0")
+        server.slot_keys(b"short", nonce, "lab", "m1", "blue_0")
+
+
+def test_tickets_are_sealed_to_the_creators_key():
+    creator, server, relay = KeyExchange(), KeyExchange(), KeyExchange()
+    nonce = random_bytes()
+    sealed = seal_secret(server.tickets_key(creator.public_bytes, nonce, "lab", "m1"), b"tickets")
+    assert open_secret(creator.tickets_key(server.public_bytes, nonce, "lab", "m1"), sealed) == b"tickets"
+    with pytest.raises(ValueError, match="not sealed to this request's key"):
+        open_secret(relay.tickets_key(server.public_bytes, nonce, "lab", "m1"), sealed)

@@ -17,8 +17,10 @@ README_BOT = Path(__file__).with_name("readme_bot.py")
 
 
 def test_a_bot_written_from_the_readme_plays_a_match(running, procs):
+    # the longest deadline: lockstep moves on as soon as both actions are in, and on a loaded machine (two busy
+    # loops beside the suite) a 50 ms one counted some of this bot's correct actions late
     created = running.lobby.create("matches/1v1.yaml", "readme", overrides={**SHORT, "clock_s": 5.0},
-                                   ready_timeout_s=120, open=False)
+                                   ready_timeout_s=120, open=False, deadline_ms=2000)
     server_key = (running.key_dir / "server.pub").read_text().strip()
     spectator = Spectator("readme", client=running.client_settings).open()
     bot = procs.start([sys.executable, str(README_BOT), "--connect", running.endpoint, "--server", "test",

@@ -7,6 +7,7 @@ from __future__ import annotations
 import os
 import signal
 import sqlite3
+from pathlib import Path
 
 import msgpack
 import numpy as np
@@ -36,8 +37,8 @@ def test_killed_bot_is_replaced_shown_disconnected_and_rejoins(running, procs):
     running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 40.0}, ready_timeout_s=120)
     blue = procs.bot(running, "m", "blue_0")
     procs.botproc(running, "m", ["orange_0"], "--delay-ms", "25")
-    token = blue.line("joined match m as blue_0").rsplit("--rejoin ", 1)[1]
-    assert token.startswith("blue_0:")
+    token = blue.line("joined match m as blue_0").rsplit("--rejoin ", 1)[1]  # a private file: blue_0:<key>
+    assert Path(token).read_text().startswith("blue_0:") and Path(token).stat().st_mode & 0o077 == 0
     wait_for(lambda: slot_info(running, "m", "blue_0")["received"] >= 20, 60, "blue to play 20 decisions")
     os.kill(blue.pid, signal.SIGKILL)
     gone = wait_for(lambda: (lambda s: s if not s["connected"] else None)(slot_info(running, "m", "blue_0")), 15,
@@ -47,7 +48,7 @@ def test_killed_bot_is_replaced_shown_disconnected_and_rejoins(running, procs):
     wait_for(lambda: slot_info(running, "m", "blue_0")["disconnected"] >= 10, 30, "replaced decisions")
     assert running.lobby.inspect("m")["status"] == "running"
     rejoined = procs.bot(running, "m", rejoin=token)
-    assert rejoined.line("joined match m as blue_0").endswith(token)
+    assert rejoined.line("joined match m as blue_0").endswith(token)  # its new token, in the same file
     wait_for(lambda: (lambda s: s["connected"] and s["received"] > received_at_kill + 10)(
         slot_info(running, "m", "blue_0")), 60, "the rejoined bot to play")
     info = running.wait_status("m", timeout_s=120)
@@ -188,8 +189,9 @@ def test_server_listens_on_loopback_only(served):
 
 def test_serve_prints_the_tickets_of_its_own_matches(served):
     proc, _, lobby = served
-    tickets = dict(line.split()[3:5] for line in proc.lines if line.startswith("match duel: ticket "))
-    assert set(tickets) == {"blue_0", "orange_0"}
+    path = Path(next(line for line in proc.lines if line.startswith("match duel: tickets in ")).split()[4])
+    tickets = dict(line.split() for line in path.read_text().splitlines())
+    assert set(tickets) == {"blue_0", "orange_0"} and path.stat().st_mode & 0o077 == 0
     with pytest.raises(ServerError, match="reserved: join with its ticket"):
         lobby.join("duel", "orange_0")
     join = lobby.join("duel", "orange_0", ticket=tickets["orange_0"])

