@@ -3,7 +3,7 @@
 A kernel compiles once for each set of argument types it meets, so warming up steps briefly what the product
 steps: a lone ``Arena`` with a staged bump (the bump's curve lookup runs from Python only when two cars meet), and
 every shipped match and minigame config, 1v1 to 4v4, barriers and ray sensors, as a ``RocketDRLParallelEnv`` and as
-a ``VectorEnv`` of two arenas (an ``ArenaBatch``). Leagues, the match server, training and the page play these same
+a ``VectorEnv`` of two arenas (an ``ArenaBatch``), in every arena shape. Leagues, the match server, training and the page play these same
 envs, so afterwards no process compiles a kernel.
 """
 from __future__ import annotations
@@ -14,6 +14,7 @@ import numpy as np
 
 from rocketdrl_ma.config import shipped_files
 from rocketdrl_ma.physics import Arena, Bump, CarControls, CarState, yaw_rot_mat
+from rocketdrl_ma.physics.arena_shape import ARENA_SHAPES
 from rocketdrl_ma.physics.compile_notice import kernels_compiled
 
 from .parallel_env import RocketDRLParallelEnv
@@ -30,9 +31,9 @@ def game_configs() -> list[str]:
     return [name for name in shipped_files((".yaml",)) if name.split("/")[0] in GAME_FOLDERS]
 
 
-def _bump() -> None:
+def _bump(arena_shape: str) -> None:
     """Two grounded cars, one driving into the other below supersonic speed, until Bump."""
-    arena = Arena(seed=0)
+    arena = Arena(seed=0, arena_shape=arena_shape)
     try:
         attacker, victim = arena.add_car(team=0), arena.add_car(team=1)
         attacker.set_state(CarState(pos=np.array([0.0, -1500.0, 17.0]), rot_mat=yaw_rot_mat(np.pi / 2),
@@ -49,8 +50,8 @@ def _bump() -> None:
         arena.close()
 
 
-def _parallel_env(config: str) -> None:
-    env = RocketDRLParallelEnv(config)
+def _parallel_env(config: str, arena_shape: str) -> None:
+    env = RocketDRLParallelEnv(config, arena_shape=arena_shape)
     try:
         env.reset(seed=0)
         for agent in env.possible_agents:
@@ -63,8 +64,8 @@ def _parallel_env(config: str) -> None:
         env.close()
 
 
-def _vector_env(config: str) -> None:
-    env = VectorEnv(config, n_arenas=VECTOR_ARENAS)
+def _vector_env(config: str, arena_shape: str) -> None:
+    env = VectorEnv(config, n_arenas=VECTOR_ARENAS, arena_shape=arena_shape)
     try:
         env.reset(seed=0)
         env.action_space.seed(0)
@@ -79,10 +80,12 @@ def warm_up(on_step: Callable[[str], None] | None = None) -> list[str]:
     """Step everything above once; returns the kernel signatures this call compiled (none if the cache was warm).
     ``on_step(name)`` is told each workload before it runs."""
     before = len(kernels_compiled())
-    workloads: list[tuple[str, Callable[[], None]]] = [("arena bump", _bump)]
-    for config in game_configs():
-        workloads += [(f"{config} ParallelEnv", lambda c=config: _parallel_env(c)),
-                      (f"{config} VectorEnv", lambda c=config: _vector_env(c))]
+    workloads: list[tuple[str, Callable[[], None]]] = []
+    for shape in ARENA_SHAPES:  # each arena shape has kernels of its own (``arena_shape.py``)
+        workloads += [(f"arena bump ({shape})", lambda s=shape: _bump(s))]
+        for config in game_configs():
+            workloads += [(f"{config} ParallelEnv ({shape})", lambda c=config, s=shape: _parallel_env(c, s)),
+                          (f"{config} VectorEnv ({shape})", lambda c=config, s=shape: _vector_env(c, s))]
     for name, run in workloads:
         if on_step is not None:
             on_step(name)

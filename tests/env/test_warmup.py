@@ -9,11 +9,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+from rocketdrl_ma.physics.arena_shape import ARENA_SHAPES
 from rocketdrl_ma.physics.compile_notice import compiling_line
 
 REPO = Path(__file__).resolve().parents[2]
 
-# A 2v2 VectorEnv and a ParallelEnv stepped; then numba's own count of kernels it could not load from its cache.
+# A 2v2 VectorEnv and a ParallelEnv stepped in the arena shape named by the first argument; then numba's own count of kernels it could not load from its cache.
 FRESH_PROCESS = """
 import sys
 import numpy as np
@@ -22,12 +23,12 @@ import rocketdrl_ma
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.physics.compile_notice import kernels_compiled
 
-vector = VectorEnv("matches/2v2.yaml", n_arenas=2)
+vector = VectorEnv("matches/2v2.yaml", n_arenas=2, arena_shape=sys.argv[1])
 vector.reset(seed=5)
 for _ in range(3):
     vector.step(np.stack([np.stack([vector.action_space.sample() for _ in range(vector.n_agents)])
                           for _ in range(2)]))
-env = rocketdrl_ma.parallel_env("matches/2v2.yaml")
+env = rocketdrl_ma.parallel_env("matches/2v2.yaml", arena_shape=sys.argv[1])
 env.reset(seed=6)
 env.step({agent: env.action_space(agent).sample() for agent in env.agents})
 modules = [m for m in list(sys.modules.values()) if getattr(m, "__name__", "").startswith("rocketdrl_ma")]
@@ -70,11 +71,12 @@ def _run(argv: list[str], cache_dir: Path) -> subprocess.CompletedProcess:
 def test_after_warmup_a_fresh_process_compiles_no_kernel(tmp_path):
     warm = _run(["-m", "rocketdrl_ma.cli", "warmup"], tmp_path)
     assert "physics kernels ready:" in warm.stdout
-    fresh = _run(["-c", FRESH_PROCESS], tmp_path)
-    _, kernels, _, misses, _, compiled = fresh.stdout.split()
-    assert int(kernels) >= 5  # the entry kernels were found, so the count below means something
-    assert (misses, compiled) == ("0", "0")
-    assert compiling_line() not in fresh.stderr
+    for arena_shape in ARENA_SHAPES:
+        fresh = _run(["-c", FRESH_PROCESS, arena_shape], tmp_path)
+        _, kernels, _, misses, _, compiled = fresh.stdout.split()
+        assert int(kernels) >= 5  # the entry kernels were found, so the count below means something
+        assert (misses, compiled) == ("0", "0"), arena_shape
+        assert compiling_line() not in fresh.stderr
 
 
 def test_the_first_compile_of_a_process_prints_the_line_once(tmp_path):
