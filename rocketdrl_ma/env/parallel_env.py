@@ -189,6 +189,7 @@ class RocketDRLParallelEnv(ParallelEnv):
                 observations[agent] = self.obs_builder.build(agent, state)
             rewards[agent], terms = self.rules.weighted_rewards(agent, state)
             infos[agent] = self._info(agent, state, terms)
+        rewards = self.rules.team_rewards(rewards)
         if (terminated or truncated) and self.info_format == "full":
             summary = self.rules.summary()
             for agent in self.agents:

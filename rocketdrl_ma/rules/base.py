@@ -18,7 +18,7 @@ from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE, arena_shape_in
 
 from . import events as game_events
 from .mutators import KickoffMutator, StateMutator
-from .rewards import CombinedReward, TermMakers
+from .rewards import CombinedReward, TermMakers, share_within_teams
 from .state import GameState, Obstacle, agent_names, agent_team
 
 NEUTRAL = CarControls()
@@ -49,7 +49,7 @@ class Rules(ABC):
 
     def __init__(self, blue_size: int = 1, orange_size: int = 1, car_preset: str = "octane",
                  reward_weights: dict[str, float] | None = None, boost_pads: bool = True, demos: bool = True,
-                 arena_shape: str = DEFAULT_ARENA_SHAPE):
+                 arena_shape: str = DEFAULT_ARENA_SHAPE, team_spirit: float = 0.0):
         for name, size in (("blue_size", blue_size), ("orange_size", orange_size)):
             if not isinstance(size, int) or not 0 <= size <= 4:
                 raise ValueError(f"{name}: must be an int in 0..4, got {size!r}")
@@ -61,6 +61,10 @@ class Rules(ABC):
         self.rewards = CombinedReward.from_weights(self.REWARD_TERMS,
                                                    {**self.DEFAULT_REWARD_WEIGHTS, **(reward_weights or {})})
         self.boost_pads, self.demos = boost_pads, demos
+        if isinstance(team_spirit, bool) or not isinstance(team_spirit, (int, float)) or not 0.0 <= team_spirit <= 1.0:
+            raise ValueError(f"team_spirit: must be a number in [0, 1] (0: own rewards, 1: the team's mean), "
+                             f"got {team_spirit!r}")
+        self.team_spirit = float(team_spirit)
         arena_shape_index(arena_shape)  # validates the name
         self.arena_shape = arena_shape
         self.arena: Arena | None = None
@@ -223,6 +227,10 @@ class Rules(ABC):
     def weighted_rewards(self, agent: str, state: GameState) -> tuple[float, dict[str, float]]:
         """The agent's reward and its per-term breakdown (each term already weighted)."""
         return self.rewards.get(agent, state)
+
+    def team_rewards(self, rewards: dict[str, float]) -> dict[str, float]:
+        """Every agent's reward after ``team_spirit`` shared it within its team (``rewards.share_within_teams``)."""
+        return share_within_teams(rewards, self.team_spirit)
 
     def close(self) -> None:
         if self.arena is not None:

@@ -45,7 +45,9 @@ class Match(Rules):
 
     REWARD_TERMS = {"goal": rewards.GoalScored, "touch": rewards.BallTouched,
                     "ball_velocity_to_goal": rewards.BallVelocityToGoal,
-                    "player_velocity_to_ball": rewards.PlayerVelocityToBall, "boost": rewards.BoostAmount}
+                    "player_velocity_to_ball": rewards.PlayerVelocityToBall, "boost": rewards.BoostAmount,
+                    "touch_speed": rewards.TouchSpeed, "touch_height": rewards.TouchHeight,
+                    "face_ball": rewards.FaceBall}
     DEFAULT_REWARD_WEIGHTS = {"goal": 10.0}
 
     def __init__(self, team_size: int = 1, blue_size: int | None = None, orange_size: int | None = None,

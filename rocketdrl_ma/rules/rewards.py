@@ -100,7 +100,38 @@ class ShooterSide(RewardTerm):
         return value if agent_team(agent) == BLUE else -value
 
 
+def _touched(agent: str, state: GameState) -> bool:
+    return any(event.agent == agent for event in _events(state, game_events.Touch))
+
+
+class TouchSpeed(RewardTerm):
+    """On the agent's touch this decision, the ball's speed after it over the ball's top speed: hard hits pay."""
+
+    def get(self, agent: str, state: GameState) -> float:
+        return _norm(state.ball.vel) / C.BALL_MAX_SPEED if _touched(agent, state) else 0.0
+
+
+class TouchHeight(RewardTerm):
+    """On the agent's touch this decision, the ball's height above its resting height over the room up to the
+    ceiling: 0 on the ground, 1 at the ceiling, so aerial touches pay."""
+
+    def get(self, agent: str, state: GameState) -> float:
+        if not _touched(agent, state):
+            return 0.0
+        return min(1.0, max(0.0, (state.ball.pos[2] - C.BALL_REST_Z) / (C.ARENA_HEIGHT - 2.0 * C.BALL_REST_Z)))
+
+
 # ------------------------------------------------------------------------------------------------- state
+class FaceBall(RewardTerm):
+    """The cosine between the agent's car's nose and the direction to the ball: 1 facing it, -1 away."""
+
+    def get(self, agent: str, state: GameState) -> float:
+        car = state.cars[agent]
+        to_ball = state.ball.pos - car.pos
+        distance = _norm(to_ball)
+        return float(car.rot_mat[:, 0] @ to_ball / distance) if distance > 1e-6 else 0.0
+
+
 class BallVelocityToGoal(RewardTerm):
     """The ball's velocity towards the centre of the goal the agent attacks, over the ball's top speed."""
 
@@ -175,6 +206,19 @@ def check_weights(available: TermMakers, weights: object, section: str = "reward
         if isinstance(weight, bool) or not isinstance(weight, (int, float)) or not math.isfinite(weight):
             raise ValueError(f"{section}.{name}: expected a finite number, got {weight!r}")
     return {name: float(weight) for name, weight in weights.items()}
+
+
+def share_within_teams(rewards: Mapping[str, float], team_spirit: float) -> dict[str, float]:
+    """OpenAI Five's team spirit: each agent gets ``(1 - team_spirit)`` of its own reward plus ``team_spirit`` of
+    its team's mean, so at 1 team-mates share every reward and no one is paid for taking a team-mate's touch."""
+    if team_spirit == 0.0:
+        return dict(rewards)
+    teams: dict[int, list[float]] = {}
+    for agent, value in rewards.items():
+        teams.setdefault(agent_team(agent), []).append(value)
+    means = {team: sum(values) / len(values) for team, values in teams.items()}
+    return {agent: (1.0 - team_spirit) * value + team_spirit * means[agent_team(agent)]
+            for agent, value in rewards.items()}
 
 
 class CombinedReward:

@@ -15,12 +15,12 @@ def tiny(path: str, n_envs: int) -> dict:
     short warm start."""
     cfg = load_train_config(path).to_mapping()
     per_iteration = 128 * n_envs * cfg_team_size(cfg)
+    imitate = cfg["selfplay"].get("imitate")
+    imitate = imitate and {**imitate, "decisions": 40, "epochs": 2, "dagger_rounds": 1, "dagger_decisions": 20}
     return {**cfg, "env_overrides": {**cfg["env_overrides"], "clock_s": 3.0}, "n_envs": n_envs, "n_workers": 0,
             "buffer_size": per_iteration, "batch_size": per_iteration // 2, "num_epoch": 1, "hidden_units": 32,
             "max_steps": per_iteration, "summary_freq": per_iteration, "checkpoint_interval": per_iteration,
-            "selfplay": {**cfg["selfplay"], "snapshot_interval": per_iteration,
-                         "imitate": {**cfg["selfplay"]["imitate"], "decisions": 40, "epochs": 2, "dagger_rounds": 1,
-                                     "dagger_decisions": 20}}}
+            "selfplay": {**cfg["selfplay"], "snapshot_interval": per_iteration, "imitate": imitate}}
 
 
 def cfg_team_size(cfg: dict) -> int:
@@ -36,8 +36,16 @@ def test_team_selfplay_config_uses_the_rotator(path, size):
     assert sp.imitate.bot == "rotator" and sp.kickstart.bot == "rotator"
 
 
+def test_the_scratch_config_starts_from_a_random_network_with_team_rewards():
+    cfg = load_train_config("policies/selfplay_2v2_scratch.yaml")
+    assert cfg.init_path is None and cfg.selfplay.imitate is None and cfg.selfplay.kickstart is None
+    assert cfg.env_overrides["team_spirit"] > 0.0
+    assert {"touch_speed", "touch_height", "face_ball", "ball_velocity_to_goal"} <= set(cfg.env_overrides["rewards"])
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("path, size", [("policies/selfplay_2v2.yaml", 2), ("policies/selfplay_3v3.yaml", 3)])
+@pytest.mark.parametrize("path, size", [("policies/selfplay_2v2.yaml", 2), ("policies/selfplay_3v3.yaml", 3),
+                                        ("policies/selfplay_2v2_scratch.yaml", 2)])
 def test_team_selfplay_trains_one_iteration(tmp_path, path, size):
     cfg = tiny(path, n_envs=2)
     cfg_path = tmp_path / "team.yaml"
