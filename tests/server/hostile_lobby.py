@@ -29,8 +29,11 @@ import time
 
 import msgpack
 import zenoh
+
 import yaml
 from cryptography.hazmat.primitives.asymmetric.x25519 import X25519PrivateKey
+
+from hostile import zenoh_config  # the other hostile client's Zenoh set-up (run as a script beside it)
 
 V = 2
 REQUEST_TAG = b"rocketdrl-ma/2 request\x00"
@@ -49,17 +52,8 @@ def body_of(raw: bytes) -> dict:
 
 
 def open_session(args):
-    config = zenoh.Config()
-    section = yaml.safe_load(open(args.config))["zenoh"] if args.config else {"connect": [args.connect]}
-    entries = {"mode": "client", "connect/endpoints": section["connect"], "listen/endpoints": [],
-               "scouting/multicast/enabled": False, "scouting/gossip/enabled": False}
-    for key, value in section.get("auth", {}).items():
-        entries[f"transport/auth/usrpwd/{key}"] = value
-    for key, value in section.get("tls", {}).items():
-        entries[f"transport/link/tls/{key}"] = value
-    for path, value in entries.items():
-        config.insert_json5(path, json.dumps(value))
-    return zenoh.open(config)
+    args.mode = "client"
+    return zenoh.open(zenoh_config(args))  # the other hostile client's Zenoh set-up: a config file or an endpoint
 
 
 class Lobby:
