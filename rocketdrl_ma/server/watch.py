@@ -74,16 +74,21 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
             latest, recent, final = None, [], None
             with Live(scoreboard(match, None, recent), console=console, auto_refresh=False,
                       transient=False) if live else _NoLive() as view:
+                recorder = DecisionRecorder(writer) if writer is not None else None
                 for update in spectator.updates(timeout_s):
                     if isinstance(update, StateUpdate):
                         latest = update
-                        if writer is not None:
-                            writer.add(update.state)
+                        if recorder is not None:
+                            recorder.state(update)
                     elif isinstance(update, EventsUpdate):
                         recent += [describe_event(e) for e in update.events if e.kind in SHOWN_EVENTS]
+                        if recorder is not None:
+                            recorder.events(update)
                     else:
                         final = update
                     view.update(scoreboard(match, latest, recent), refresh=True)
+                if recorder is not None:
+                    recorder.flush()
             if live:
                 console.line()  # the live view leaves its cursor at the end of its last line
             if spectator.dropped:
@@ -100,6 +105,32 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
             for name in os.listdir(tmp_dir):
                 os.remove(os.path.join(tmp_dir, name))
             os.rmdir(tmp_dir)
+
+
+class DecisionRecorder:
+    """Writes each decision's state with every event of its decision: the published state carries only its last
+    tick's events, the decision's events message (sent right after it) all of them."""
+
+    def __init__(self, writer):
+        self.writer = writer
+        self._held_state = None  # the newest decision's state, written once the next one comes (or at the end)
+
+    def state(self, update: StateUpdate) -> None:
+        self.flush()
+        self._held_state = update.state
+
+    def events(self, update: EventsUpdate) -> None:
+        if self._held_state is None:
+            return  # events of a decision whose state arrived before this spectator did
+        # a late decision's events go with the next state: their ticks still say when they happened
+        merged = list(update.events)
+        merged += [e for e in self._held_state.events if e not in merged]
+        self._held_state.events = sorted(merged, key=lambda e: e.tick)
+
+    def flush(self) -> None:
+        if self._held_state is not None:
+            self.writer.add(self._held_state)
+            self._held_state = None
 
 
 class _NoLive:

@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Callable
 
 from rocketdrl_ma.config import REPO_ROOT
+from rocketdrl_ma.physics.compile_notice import COLD_COMPILE_ESTIMATE_S
 from rocketdrl_ma.rules.events import GameEvent
 from rocketdrl_ma.server.protocol import ENDED_STATUSES
 
@@ -39,6 +40,8 @@ STATIC_DIR = Path(__file__).parent / "static"
 PACKAGED_VENDOR_DIR = Path(__file__).parent / "vendor"  # in a wheel: the page's npm files, node_modules' layout
 MAX_STATES_PER_S = 30.0
 MAX_REQUEST_BYTES = 64 * 1024
+#: a followed source with no state after this long gets a hint on the page (kernels compiling, bots joining)
+FIRST_STATE_HINT_S = 2.0
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                  ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
                  ".json": "application/json", ".png": "image/png", ".svg": "image/svg+xml"}
@@ -102,6 +105,17 @@ class FrameStats:
                 "bytes_max": self.bytes_max, "cars_in_largest": self.bytes_max_cars,
                 "min_interval_s": self.min_interval_s,
                 "states_per_s_recent": (len(times) - 1) / span if span > 0 else None}
+
+
+def first_state_hint(kind: str, info: dict) -> str:
+    """What the page says while a followed source has published no state yet."""
+    if kind == "train":
+        return "waiting for the run's next evaluation episode"
+    compiling = (f"a match server's first match compiles its physics kernels first (once per machine, "
+                 f"~{COLD_COMPILE_ESTIMATE_S} s or more on a busy machine; `rocketdrl-ma warmup` does it ahead)")
+    if info.get("status") == "waiting":
+        return f"waiting for the match to start (its bots joining, or its ready timeout); then {compiling}"
+    return f"no state yet: {compiling}"
 
 
 class PageServer:
@@ -235,7 +249,9 @@ class PageServer:
         """Send the newest state at most ``max_rate`` times a second (never two within one period), with
         every event since the last one."""
         period = 1.0 / self.max_rate
+        cast_shown: dict | None = None
         agents: list[str] | None = None
+        hint_at: float | None = time.monotonic() + FIRST_STATE_HINT_S  # None once a state came or the hint went
         shown: tuple | None = None
         events: list[GameEvent] = []
         last_sent: float | None = None
@@ -249,14 +265,20 @@ class PageServer:
             while True:
                 update: FeedUpdate = follower.poll()
                 events += update.events
-                live = update.state
+                live, final = update.state, update.final
+                if update.server_left and final is None and kind == "match":
+                    final = await asyncio.to_thread(follower.lost_end)
                 try:
                     cast = roster(live.state, live.names) if live is not None else None
                 except ValueError:  # a state no match has (e.g. a car that is no blue_N/orange_N): dropped
                     live = None
+                if live is None and hint_at is not None and time.monotonic() >= hint_at:
+                    hint_at = None
+                    await ws.send(pack_message({"type": "hint", "text": first_state_hint(kind, follower.info)}))
                 if live is not None:
-                    if cast["agents"] != agents:
-                        agents = cast["agents"]
+                    hint_at = None
+                    if cast != cast_shown:  # new cars, or new names (a training run's next iteration)
+                        cast_shown, agents = cast, cast["agents"]
                         await ws.send(pack_message(cast))
                     status = (live.status, live.info.get("iteration"), live.info.get("run"))
                     if status != shown:
@@ -269,8 +291,8 @@ class PageServer:
                     self.stats.add(len(payload), len(agents), None if last_sent is None else now - last_sent)
                     last_sent = now
                     await ws.send(payload)
-                if update.final is not None:
-                    final = {k: update.final.get(k) for k in ("status", "summary", "result_key", "info", "error")}
+                if final is not None:
+                    final = {k: final.get(k) for k in ("status", "summary", "result_key", "info", "error")}
                     await ws.send(pack_message({"type": "final", "events": feed_events(events), **final}))
                     events = []
                     if kind == "match":

@@ -33,7 +33,9 @@ function onMessage(data) {
     case "watching": timeline.startLive(); setTitle(`${message.kind === "train" ? "training run" : "match"} ${message.id}`); break;
     case "roster": setRoster(message); break;
     case "status": status = message; setTitle(); break;
+    case "hint": showNotice(message.text); break;
     case "frame":
+      if (noticeIsHint) showNotice(null);
       stats.frames += 1; stats.bytesLast = data.byteLength; stats.bytesMax = Math.max(stats.bytesMax, data.byteLength);
       stats.arrivals.push(now);
       timeline.pushLive(message, now);
@@ -41,6 +43,7 @@ function onMessage(data) {
     case "final":
       timeline.addEvents(message.events);
       status = { ...(status || {}), status: message.status, final: true, info: message.info || (status || {}).info };
+      if (message.status === "lost" || message.status === "failed") showNotice(`match ${message.status}: ${message.error}`, false);
       setTitle();
       break;
     case "replay": openReplay(message); break;
@@ -76,7 +79,16 @@ function showList(list) {
       isActive("replay", r.id), () => openReplayById(r.id))) : [item("none", null, false, () => {})]));
 }
 
+// One line over the arena: a hint while nothing is shown yet (cleared by the first frame), or how a match was lost.
+let noticeIsHint = false;
+function showNotice(text, isHint = true) {
+  $("notice").hidden = !text;
+  $("notice").textContent = text || "";
+  noticeIsHint = !!text && isHint;
+}
+
 function watch(kind, id) {
+  showNotice(null);
   source = { kind, id };
   location.hash = `${kind}=${encodeURIComponent(id)}`;
   status = null;
@@ -87,6 +99,7 @@ function watch(kind, id) {
 }
 
 function openReplayById(id) {
+  showNotice(null);
   source = { kind: "replay", id };
   location.hash = `replay=${encodeURIComponent(id)}`;
   status = null;
@@ -222,7 +235,7 @@ function updateHud(s) {
     $("feed").replaceChildren(...events.map((e) => {
       const [text, cls] = describe(e);
       const li = document.createElement("li");
-      li.textContent = `${clock(e.tick / (s.r || 120), true).replace("+", "")}  ${text}`;
+      li.textContent = `${e.clock === undefined ? "" : clock(e.clock, e.overtime)}  ${text}`;
       if (cls) li.className = cls;
       return li;
     }));
@@ -285,6 +298,8 @@ window.__view = {
   // each car's position, null for a car not drawn (absent or demolished)
   carPositions: () => (shown ? shown.a.map((c) => (c && !(c[8] & FLAG_DEMOED) ? c.slice(0, 3) : null)) : null),
   project: (point) => view.project(point),
+  inView: (point) => view.inView(point),
+  chased: () => (view.cameraMode === "chase" ? view.chaseIndex : null),
   camera: () => view.cameraMode,
   score: () => (shown ? [...shown.s] : null),
   hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],

@@ -7,6 +7,8 @@ THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
 
 export const TEAM_COLORS = [0x2f7bff, 0xff8a1c];
 export const TRAIL_POINTS = 24;
+// how far off the view's axis the chased car may be, as a fraction of half the vertical field of view
+const CHASE_MAX_OFF_AXIS = 0.7;
 
 function arenaMeshes(arena) {
   // Colour the physics' triangles by where they are: floor, goal boxes (by team) and the rest of the shell.
@@ -130,6 +132,7 @@ export class View {
     this.camera = new THREE.PerspectiveCamera(55, 1, 20, 40000);
     this.cameraMode = "broadcast";
     this.chaseIndex = 0;
+    this.ballCam = true;
     this.cars = [];
     this.roster = null;
     this.camTarget = new THREE.Vector3();
@@ -250,6 +253,14 @@ export class View {
     });
   }
 
+  // Whether a point (uu) is inside the camera's view (in front of it and within the canvas).
+  inView([x, y, z]) {
+    this.camera.updateMatrixWorld();
+    const frustum = new THREE.Frustum().setFromProjectionMatrix(
+      new THREE.Matrix4().multiplyMatrices(this.camera.projectionMatrix, this.camera.matrixWorldInverse));
+    return frustum.containsPoint(new THREE.Vector3(x, y, z));
+  }
+
   // Where a point (uu) is on the canvas, in CSS pixels from its top left.
   project([x, y, z]) {
     const v = new THREE.Vector3(x, y, z).project(this.camera);
@@ -284,7 +295,10 @@ export class View {
       up = new THREE.Vector3(-1, 0, 0); // the field's length across the screen, blue's goal on the left
     } else if (chased && chased.car.visible) {
       const car = chased.car.position;
-      const away = new THREE.Vector3(car.x - ball.x, car.y - ball.y, 0);
+      // ball cam: behind the car on the line from the ball; car cam: behind the car's heading
+      const heading = new THREE.Vector3(1, 0, 0).applyQuaternion(chased.car.quaternion);
+      const away = this.ballCam ? new THREE.Vector3(car.x - ball.x, car.y - ball.y, 0)
+        : new THREE.Vector3(-heading.x, -heading.y, 0);
       if (away.lengthSq() < 1) away.set(-1, 0, 0);
       away.normalize();
       pos = new THREE.Vector3(car.x + away.x * 750, car.y + away.y * 750, car.z + 320);
@@ -293,7 +307,8 @@ export class View {
         pos.set(THREE.MathUtils.clamp(pos.x, 150 - f.extent_x, f.extent_x - 150),
           THREE.MathUtils.clamp(pos.y, 150 - f.extent_y, f.extent_y - 150), THREE.MathUtils.clamp(pos.z, 60, f.height - 100));
       }
-      target = new THREE.Vector3().copy(ball).lerp(car, 0.25);
+      target = this.ballCam ? new THREE.Vector3().copy(ball).lerp(car, 0.25)
+        : new THREE.Vector3().copy(car).addScaledVector(away, -1500);
     } else {
       // beside the field (+x, so blue's goal is on the left), level with the ball along its length
       pos = new THREE.Vector3(ball.x * 0.35 + 5600, ball.y * 0.8, 2600 + ball.z * 0.3);
@@ -303,8 +318,25 @@ export class View {
     this._lastMode = this.cameraMode;
     this.camPos.lerp(pos, snap ? 1 : follow);
     this.camTarget.lerp(target, snap ? 1 : follow);
+    if (chased && chased.car.visible) this.keepInView(chased.car.position);
     cam.position.copy(this.camPos);
     cam.up.copy(up);
     cam.lookAt(this.camTarget);
+  }
+
+  // Turn the camera's aim towards `point` until it is within CHASE_MAX_OFF_AXIS of the vertical field of view
+  // from the centre: a ball high above would otherwise take the chased car off the bottom of the screen.
+  keepInView(point) {
+    const toPoint = new THREE.Vector3().subVectors(point, this.camPos);
+    const aim = new THREE.Vector3().subVectors(this.camTarget, this.camPos);
+    if (toPoint.lengthSq() < 1 || aim.lengthSq() < 1) return;
+    const distance = aim.length();
+    toPoint.normalize(); aim.normalize();
+    const limit = CHASE_MAX_OFF_AXIS * THREE.MathUtils.degToRad(this.camera.fov / 2);
+    const angle = toPoint.angleTo(aim);
+    if (angle <= limit) return;
+    const turn = new THREE.Quaternion().setFromUnitVectors(toPoint, aim);
+    const partial = new THREE.Quaternion().slerp(turn, limit / angle);
+    this.camTarget.copy(this.camPos).addScaledVector(toPoint.applyQuaternion(partial), distance);
   }
 }

@@ -25,6 +25,9 @@ function slerp(qa, qb, t) {
   return [x / n, y / n, z / n, w / n];
 }
 
+// An event with the match clock of the frame that brought it (the scoreboard's time, not the physics' tick).
+function onClock(event, frame) { return { ...event, clock: frame.c, overtime: frame.o }; }
+
 function far(a, b) { return Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]) > TELEPORT_UU; }
 
 // The frames around `tick` and how far between them it is: [a, b, t], or null with no frames.
@@ -90,7 +93,7 @@ export class Timeline {
     if (last && frame.t === last.t) { this.frames[this.frames.length - 1] = frame; }
     else this.frames.push(frame);
     this.tickRate = frame.r || this.tickRate;
-    for (const e of frame.e || []) this.events.push(e);
+    for (const e of frame.e || []) this.events.push(onClock(e, frame));
     if (last && frame.t > last.t && this.lastArrival) {
       const gap = Math.max(now - this.lastArrival, 1e-3);
       const rate = (frame.t - last.t) / gap;
@@ -104,14 +107,17 @@ export class Timeline {
     while (this.events.length > 50) this.events.shift();
   }
 
-  addEvents(events) { for (const e of events || []) this.events.push(e); }
+  addEvents(events) {
+    const last = this.frames[this.frames.length - 1];
+    for (const e of events || []) this.events.push(last ? onClock(e, last) : e);
+  }
 
   // ------------------------------------------------------------------ replay
   loadReplay(frames, tickRate) {
     this.reset();
     this.frames = frames;
     this.tickRate = tickRate || 120;
-    this.events = frames.flatMap((f) => f.e || []);
+    this.events = frames.flatMap((f) => (f.e || []).map((e) => onClock(e, f)));
     this.playhead = frames.length ? frames[0].t : 0;
     this.playing = true;
   }
