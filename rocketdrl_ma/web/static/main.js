@@ -298,8 +298,6 @@ window.__view = {
   // each car's position, null for a car not drawn (absent or demolished)
   carPositions: () => (shown ? shown.a.map((c) => (c && !(c[8] & FLAG_DEMOED) ? c.slice(0, 3) : null)) : null),
   project: (point) => view.project(point),
-  inView: (point) => view.inView(point),
-  chased: () => (view.cameraMode === "chase" ? view.chaseIndex : null),
   camera: () => view.cameraMode,
   score: () => (shown ? [...shown.s] : null),
   hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],

@@ -253,14 +253,6 @@ export class View {
     });
   }
 
-  // Whether a point (uu) is inside the camera's view (in front of it and within the canvas).
-  inView([x, y, z]) {
-    this.camera.updateMatrixWorld();
-    const frustum = new THREE.Frustum().setFromProjectionMatrix(
-      new THREE.Matrix4().multiplyMatrices(this.camera.projectionMatrix, this.camera.matrixWorldInverse));
-    return frustum.containsPoint(new THREE.Vector3(x, y, z));
-  }
-
   // Where a point (uu) is on the canvas, in CSS pixels from its top left.
   project([x, y, z]) {
     const v = new THREE.Vector3(x, y, z).project(this.camera);
