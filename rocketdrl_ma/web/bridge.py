@@ -52,7 +52,9 @@ MAX_STATES_PER_S = 30.0
 MAX_REQUEST_BYTES = 64 * 1024
 #: a followed source with no state after this long gets a hint on the page (kernels compiling, bots joining)
 FIRST_STATE_HINT_S = 2.0
-OPS = ("list", "watch", "replay", "stop", "play", "input", "leave")
+WATCH_OPS = ("list", "watch", "replay", "stop")
+PLAY_OPS = ("play", "input", "leave")
+OPS = WATCH_OPS + PLAY_OPS
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                  ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
                  ".json": "application/json", ".png": "image/png", ".svg": "image/svg+xml"}
@@ -218,8 +220,6 @@ class PageServer:
 
     async def _take_seat(self, request: dict) -> HumanSeat:
         """Seat this page in a match (created for it when the request names a config): ValueError if refused."""
-        if self.play_opponents is None:
-            raise ValueError("op: 'play' needs a page server started with --play")
         feed = await self._get_feed()
         if feed is None:
             raise ValueError(f"zenoh: no match server reachable ({self._feed_error})")
@@ -264,9 +264,15 @@ class PageServer:
                     if not isinstance(request, dict):
                         raise ValueError("request: expected a JSON object")
                     op = request.get("op")
+                    if op not in (OPS if self.play_opponents is not None else WATCH_OPS):
+                        raise ValueError(f"op: {op!r} is not one of {list(WATCH_OPS)}" + (
+                            f" or {list(PLAY_OPS)}" if self.play_opponents is not None else
+                            " (the page is read-only; `rocketdrl-ma web --play` lets it play)"))
                     if op == "input":
-                        if seat is None or not seat.playing:
+                        if seat is None:
                             raise ValueError("input: this page holds no seat (play first)")
+                        if not seat.playing:  # the match just ended: the page learns it from the final message
+                            continue
                         seat.set_controls(request.get("c"))
                         await ws.send(pack_message({"type": "ack", "n": request.get("n")}))
                         continue
@@ -299,10 +305,6 @@ class PageServer:
                     elif op == "replay":
                         reply = await asyncio.to_thread(self.library.open, request.get("id"))
                         await ws.send(pack_message(reply))
-                    elif op == "stop":
-                        pass
-                    else:
-                        raise ValueError(f"op: {op!r} is not one of {list(OPS)}")
                 except (ValueError, json.JSONDecodeError) as e:
                     await ws.send(pack_message({"type": "error", "error": str(e)}))
         finally:

@@ -27,7 +27,8 @@ from rocketdrl_ma.server.settings import ClientSettings
 
 log = logging.getLogger(__name__)
 #: the games a page may start
-PLAY_CONFIGS = ("matches/1v1.yaml", "matches/2v2.yaml", "matches/3v3.yaml", "matches/4v4.yaml")
+PLAY_CONFIGS = ("matches/1v1.yaml", "matches/2v2.yaml", "matches/3v3.yaml", "matches/4v4.yaml",
+                "minigames/penalty.yaml")
 #: throttle, steer, pitch, yaw, roll, jump, boost, handbrake: the continuous action format
 CONTROLS = ("throttle", "steer", "pitch", "yaw", "roll", "jump", "boost", "handbrake")
 #: a created match waits this long for the human before its empty slots go to the fill bots

@@ -1,6 +1,8 @@
 // The page: lists what can be watched, follows one source over the websocket, draws it and its HUD.
-// Read-only: the only requests it can send are list, watch, replay and stop.
+// Watching sends only list, watch, replay and stop; a page server started with --play also takes a seat
+// for this page (play, then input: its own car's controls, and leave).
 import { decode } from "@msgpack/msgpack";
+import { BINDABLE, Controls } from "./play.js";
 import { TRAIL_POINTS, View } from "./scene.js";
 import { FLAG_DEMOED, Timeline } from "./timeline.js";
 
@@ -10,6 +12,11 @@ const timeline = new Timeline();
 const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
 let boostPanels = [];
 let socket = null, roster = null, source = null, lastList = null, status = null, hudHidden = false;
+const controls = new Controls();
+// this page's seat: {match, slot}; sent: the last controls sent and when each unanswered input left
+let seat = null, sent = null, inputSeq = 0, rebinding = null;
+const inputSentAt = new Map(), ackMs = [];
+controls.onBallCam = () => { view.ballCam = !view.ballCam; markCamera(); };
 
 // ------------------------------------------------------------------------------------------- websocket
 function send(request) { if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(request)); }
@@ -41,12 +48,15 @@ function onMessage(data) {
       timeline.pushLive(message, now);
       break;
     case "final":
+      if (seat) seat.ended = true;
       timeline.addEvents(message.events);
       status = { ...(status || {}), status: message.status, final: true, info: message.info || (status || {}).info };
       if (message.status === "lost" || message.status === "failed") showNotice(`match ${message.status}: ${message.error}`, false);
       setTitle();
       break;
     case "replay": openReplay(message); break;
+    case "seat": onSeat(message); break;
+    case "ack": onAck(message.n); break;
     case "error": console.warn(`page server: ${message.error}`); setTitle(`error: ${message.error}`); break;
     default: console.warn(`page server: unknown message ${message.type}`);
   }
@@ -68,9 +78,18 @@ function showList(list) {
   $("connection").textContent = z.connected ? `match server "${z.server}"` : (z.error ? "no match server reachable" : "replays only");
   const isActive = (kind, id) => source && source.kind === kind && source.id === id;
   const score = (s) => (s ? ` ${s.blue ?? s[0]}-${s.orange ?? s[1]}` : "");
-  $("list-matches").replaceChildren(...(list.matches.length ? list.matches.map((m) =>
-    item(m.id, `${m.status} · ${m.mode} · ${m.config}${score(m.score)}`, isActive("match", m.id),
-      () => watch("match", m.id))) : [item("none", null, false, () => {})]));
+  $("list-matches").replaceChildren(...(list.matches.length ? list.matches.map((m) => {
+    const li = item(m.id, `${m.status} · ${m.mode} · ${m.config}${score(m.score)}`, isActive("match", m.id),
+      () => watch("match", m.id));
+    if (list.play && m.mode === "realtime" && m.status === "waiting") {
+      const join = document.createElement("button");
+      join.textContent = "Play"; join.className = "join";
+      join.addEventListener("click", (e) => { e.stopPropagation(); play({ match: m.id }); });
+      li.append(join);
+    }
+    return li;
+  }) : [item("none", null, false, () => {})]));
+  showPlayChoices(list.play);
   $("list-training").replaceChildren(...(list.training.length ? list.training.map((r) =>
     item(r.id, "publishing evaluation episodes", isActive("train", r.id), () => watch("train", r.id)))
     : [item("none", null, false, () => {})]));
@@ -88,6 +107,7 @@ function showNotice(text, isHint = true) {
 }
 
 function watch(kind, id) {
+  if (seat) leaveSeat();
   showNotice(null);
   source = { kind, id };
   location.hash = `${kind}=${encodeURIComponent(id)}`;
@@ -99,6 +119,7 @@ function watch(kind, id) {
 }
 
 function openReplayById(id) {
+  if (seat) leaveSeat();
   showNotice(null);
   source = { kind: "replay", id };
   location.hash = `replay=${encodeURIComponent(id)}`;
@@ -114,6 +135,84 @@ function openFromHash() {
   const id = decodeURIComponent(m[2]);
   if (m[1] === "replay") openReplayById(id); else watch(m[1], id);
 }
+
+// ------------------------------------------------------------------------------------------- play
+function showPlayChoices(play) {
+  $("play-panel").hidden = !play;
+  if (!play) return;
+  const fill = (select, values) => {
+    if (select.options.length === values.length) return; // keep the user's choice across list refreshes
+    select.replaceChildren(...values.map((v) => { const o = document.createElement("option"); o.value = o.textContent = v; return o; }));
+  };
+  fill($("play-config"), play.configs);
+  fill($("play-opponent"), play.opponents);
+}
+
+function play(request) {
+  setTitle(request.match ? `joining match ${request.match}…` : "creating a match…");
+  send({ op: "play", ...request });
+}
+
+function onSeat(message) {
+  if (!message.match) { seat = null; $("seat-panel").hidden = true; return; }
+  seat = { match: message.match, slot: message.slot, ended: false };
+  source = { kind: "match", id: message.match };
+  history.replaceState(null, "", `#match=${encodeURIComponent(message.match)}`);
+  status = null;
+  $("timeline").hidden = true;
+  timeline.startLive();
+  sent = null;
+  setTitle(`you are ${message.slot} in match ${message.match}`);
+  $("seat-panel").hidden = false;
+  showBindings();
+  if (lastList) showList(lastList);
+}
+
+function leaveSeat() {
+  send({ op: "leave" });
+  seat = null;
+  controls.releaseAll();
+  $("seat-panel").hidden = true;
+}
+
+// Send the controls when they change (the server keeps applying the last ones).
+function sendControls() {
+  if (!seat || seat.ended) return;
+  const c = controls.read();
+  const key = c.join(",");
+  if (key === sent) return;
+  sent = key;
+  inputSeq += 1;
+  inputSentAt.set(inputSeq, performance.now());
+  send({ op: "input", c, n: inputSeq });
+}
+
+function onAck(n) {
+  const at = inputSentAt.get(n);
+  inputSentAt.delete(n);
+  if (at === undefined) return;
+  ackMs.push(performance.now() - at);
+  if (ackMs.length > 50) ackMs.shift();
+  const sorted = [...ackMs].sort((a, b) => a - b);
+  $("latency").textContent = `input to the page server: ${sorted[Math.floor(sorted.length / 2)].toFixed(0)} ms` +
+    ` · view ${(timeline.lagS() * 1000).toFixed(0)} ms behind the server`;
+}
+
+function showBindings() {
+  const pretty = (code) => code.replace(/^Key/, "").replace(/^Digit/, "");
+  $("bindings").replaceChildren(...BINDABLE.map(([action, label]) => {
+    const li = document.createElement("li");
+    const b = document.createElement("button");
+    b.textContent = rebinding === action ? "press a key…" : pretty(controls.keys[action]);
+    b.addEventListener("click", () => { rebinding = action; showBindings(); });
+    li.append(b, ` ${label}`);
+    return li;
+  }));
+}
+
+$("play-create").addEventListener("click", () => play({ config: $("play-config").value, opponent: $("play-opponent").value }));
+$("seat-leave").addEventListener("click", () => { leaveSeat(); setTitle("left the match"); });
+$("bindings-reset").addEventListener("click", () => { controls.resetBindings(); showBindings(); });
 
 // ------------------------------------------------------------------------------------------- replays
 function openReplay(message) {
@@ -144,6 +243,8 @@ function togglePlay() {
 function setRoster(r) {
   roster = r;
   view.setRoster(r);
+  const mine = seat ? r.agents.indexOf(seat.slot) : -1;
+  if (mine >= 0 && !(view.cameraMode === "chase" && view.chaseIndex === mine)) view.setCamera("chase", mine);
   for (const team of [0, 1]) {
     const panel = $(team === 0 ? "boost-blue" : "boost-orange");
     panel.replaceChildren(...r.agents.map((agent, i) => {
@@ -152,6 +253,7 @@ function setRoster(r) {
       div.className = "car-boost"; div.dataset.index = i;
       div.innerHTML = `<span class="name"></span> <b class="amount"></b><div class="bar"><div class="fill"></div></div>`;
       div.querySelector(".name").textContent = r.names[i] === agent ? agent : `${agent} · ${r.names[i]}`;
+      if (i === mine) div.classList.add("you");
       return div;
     }).filter(Boolean));
   }
@@ -175,6 +277,7 @@ function setCamera(mode) {
 function markCamera() {
   const current = view.cameraMode === "chase" ? `chase:${view.chaseIndex}` : view.cameraMode;
   for (const b of $("cameras").children) b.classList.toggle("active", b.dataset.mode === current);
+  $("ball-cam").textContent = seat && view.cameraMode === "chase" ? (view.ballCam ? "ball cam" : "car cam") : "";
 }
 
 function setTitle(text) {
@@ -252,6 +355,8 @@ function updateHud(s) {
 // ------------------------------------------------------------------------------------------- keys
 window.addEventListener("keydown", (e) => {
   if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+  if (rebinding) { controls.bind(rebinding, e.code); rebinding = null; showBindings(); e.preventDefault(); return; }
+  if (seat && controls.keyDown(e.code)) { e.preventDefault(); sendControls(); return; }
   if (e.key === "1") setCamera("broadcast");
   else if (e.key === "2") setCamera("top");
   else if (e.key === "3" && roster && roster.agents.length) {
@@ -261,6 +366,9 @@ window.addEventListener("keydown", (e) => {
   else if (e.key === "ArrowLeft") timeline.step(-1);
   else if (e.key === "h") { hudHidden = !hudHidden; $("hud").classList.toggle("hidden", hudHidden); }
 });
+
+window.addEventListener("keyup", (e) => { controls.keyUp(e.code); if (seat) sendControls(); });
+window.addEventListener("blur", () => { controls.releaseAll(); if (seat) sendControls(); });
 
 setInterval(() => send({ op: "list" }), 3000);
 window.addEventListener("hashchange", () => {
@@ -275,6 +383,7 @@ function loop() {
   const dt = Math.min(now - last, 0.25);
   const started = performance.now();
   last = now;
+  sendControls(); // gamepads have no events: read every frame
   timeline.advance(dt, now);
   shown = timeline.current();
   if (shown) view.setObstacles(shown.x);
@@ -304,6 +413,11 @@ window.__view = {
   tick: () => timeline.playhead,
   frameIndex: () => timeline.index(),
   mode: () => (source ? source.kind : null),
+  // each car as drawn: [x, y, z, qx, qy, qz, qw, boost, flags], null for a car not in the game
+  carStates: () => (shown ? shown.a.map((c) => (c ? [...c] : null)) : null),
+  seat: () => (seat ? { ...seat } : null),
+  inputsSent: () => inputSeq,
+  ballCam: () => view.ballCam,
   roster: () => roster,
   stats: () => ({ fps: rate(stats.renders), statesPerS: rate(stats.arrivals), frames: stats.frames,
     bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs }),

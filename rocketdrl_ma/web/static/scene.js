@@ -5,6 +5,14 @@ import { FLAG_BOOSTING, FLAG_DEMOED, FLAG_SUPERSONIC } from "./timeline.js";
 
 THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
 
+// The game's world is left-handed (a car's "right" axis is its forward turned +90 degrees about up); three.js
+// draws right-handed. The scene is the game mirrored in x, so it looks as in the game and a car steering
+// right turns right on screen. Game points and rotations go through these two on their way in.
+export function toScene(x, y, z) { return [-x, y, z]; }
+// The quaternion (x, y, z, w) of rotation R drawn mirrored: M R D with M = diag(-1, 1, 1), D = diag(1, -1, 1)
+// (a proper rotation taking the model's forward and up to the mirrored forward and up).
+function toSceneQuaternion(x, y, z, w) { return [-y, -x, w, z]; }
+
 export const TEAM_COLORS = [0x2f7bff, 0xff8a1c];
 export const TRAIL_POINTS = 24;
 // how far off the view's axis the chased car may be, as a fraction of half the vertical field of view
@@ -12,7 +20,8 @@ const CHASE_MAX_OFF_AXIS = 0.7;
 
 function arenaMeshes(arena) {
   // Colour the physics' triangles by where they are: floor, goal boxes (by team) and the rest of the shell.
-  const v = arena.vertices, tris = arena.triangles, backY = arena.field.extent_y;
+  const v = arena.vertices.map((value, i) => (i % 3 === 0 ? -value : value)), backY = arena.field.extent_y;
+  const tris = arena.triangles.map((id, i, all) => (i % 3 === 1 ? all[i + 1] : i % 3 === 2 ? all[i - 1] : id));
   const groups = { floor: [], shell: [], goal0: [], goal1: [] };
   for (let i = 0; i < tris.length; i += 3) {
     const ids = [tris[i], tris[i + 1], tris[i + 2]];
@@ -66,13 +75,13 @@ function makePads(arena) {
     const pad = new THREE.Mesh(new THREE.CylinderGeometry(r, r, 10, big ? 24 : 12),
       new THREE.MeshBasicMaterial({ color: 0xffc93c }));
     pad.rotation.x = Math.PI / 2;
-    pad.position.set(x, y, 6);
+    pad.position.set(...toScene(x, y, 6));
     group.add(pad);
     let orb = null;
     if (big) {
       orb = new THREE.Mesh(new THREE.SphereGeometry(60, 16, 12),
         new THREE.MeshBasicMaterial({ color: 0xffb020, transparent: true, opacity: 0.75 }));
-      orb.position.set(x, y, 120);
+      orb.position.set(...toScene(x, y, 120));
       group.add(orb);
     }
     pads.push({ pad, orb, lit: true });
@@ -201,14 +210,14 @@ export class View {
   }
 
   apply(s, now, trailPoints) {
-    const [bx, by, bz] = s.b;
+    const [bx, by, bz] = toScene(...s.b);
     this.ball.position.set(bx, by, bz);
     this.ballShadow.position.set(bx, by, 3);
     this.ballShadow.material.opacity = Math.max(0.08, 0.4 - bz / 5000);
     const pos = this.trailLine.geometry.attributes.position, col = this.trailLine.geometry.attributes.color;
     const trail = trailPoints || [];
     for (let i = 0; i < TRAIL_POINTS; i++) {
-      const p = trail[Math.min(i, trail.length - 1)] || [bx, by, bz]; // newest first
+      const p = trail.length ? toScene(...trail[Math.min(i, trail.length - 1)]) : [bx, by, bz]; // newest first
       const k = 1 - Math.min(i, trail.length - 1) / TRAIL_POINTS;
       pos.setXYZ(i, p[0], p[1], p[2]);
       col.setXYZ(i, 0.05 + 0.9 * k, 0.05 + 0.85 * k, 0.08 + 0.6 * k);
@@ -241,8 +250,8 @@ export class View {
       c.demoedAt = null;
       c.wreck.visible = false;
       c.car.visible = true;
-      c.car.position.set(car[0], car[1], car[2]);
-      c.car.quaternion.set(car[3], car[4], car[5], car[6]);
+      c.car.position.set(...toScene(car[0], car[1], car[2]));
+      c.car.quaternion.set(...toSceneQuaternion(car[3], car[4], car[5], car[6]));
       const boosting = (car[8] & FLAG_BOOSTING) !== 0;
       c.flame.visible = boosting;
       if (boosting) {
@@ -255,7 +264,7 @@ export class View {
 
   // Where a point (uu) is on the canvas, in CSS pixels from its top left.
   project([x, y, z]) {
-    const v = new THREE.Vector3(x, y, z).project(this.camera);
+    const v = new THREE.Vector3(...toScene(x, y, z)).project(this.camera);
     return [((v.x + 1) / 2) * this.canvas.clientWidth, ((1 - v.y) / 2) * this.canvas.clientHeight];
   }
 
@@ -267,7 +276,7 @@ export class View {
     for (const [cx, cy, cz, hx, hy, hz] of list || []) {
       const box = new THREE.Mesh(new THREE.BoxGeometry(2 * hx, 2 * hy, 2 * hz),
         new THREE.MeshLambertMaterial({ color: 0x9aa4b2, transparent: true, opacity: 0.6 }));
-      box.position.set(cx, cy, cz);
+      box.position.set(...toScene(cx, cy, cz));
       this.obstacles.add(box);
     }
   }

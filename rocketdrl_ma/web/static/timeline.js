@@ -107,6 +107,9 @@ export class Timeline {
     while (this.events.length > 50) this.events.shift();
   }
 
+  // Live: how far behind the newest state the playhead is, in seconds of game time.
+  lagS() { return this.frames.length ? (this.lastTick - this.playhead) / (this.ticksPerS || this.tickRate) : 0; }
+
   addEvents(events) {
     const last = this.frames[this.frames.length - 1];
     for (const e of events || []) this.events.push(last ? onClock(e, last) : e);

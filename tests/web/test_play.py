@@ -1,0 +1,176 @@
+"""A human in a real-time match from the page, in a real headless Chromium: `rocketdrl-ma web --play` creates a
+match against bots, the page takes its slot, and key presses drive that car as commanded (throttle, steer, jump,
+boost); a penalty is shot and scored from the keyboard. The page server acts only for its page's own seat."""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from web_helpers import PageSocket, Procs, launch_chromium, wait_for
+
+pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
+VIEWPORT = {"width": 1280, "height": 720}
+FLAG_BOOSTING = 2
+
+
+@pytest.fixture(scope="module")
+def stack(tmp_path_factory):
+    from playwright.sync_api import sync_playwright
+
+    tmp = tmp_path_factory.mktemp("play")
+    procs = Procs()
+    try:
+        _, endpoint = procs.serve(tmp, name="play")
+        _, url = procs.web("--connect", endpoint, "--server", "play", "--play", "--replays", str(tmp))
+        with sync_playwright() as playwright:
+            browser = launch_chromium(playwright)
+            yield {"url": url, "procs": procs, "endpoint": endpoint, "browser": browser}
+            browser.close()
+    finally:
+        procs.stop_all()
+
+
+def start_playing(stack, config: str, opponent: str, viewport: dict = VIEWPORT):
+    page = stack["browser"].new_page(viewport=viewport)
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(stack["url"])
+    page.wait_for_function("window.__view && window.__view.ready", timeout=30_000)
+    page.wait_for_selector("#play-panel:not([hidden])", timeout=20_000)
+    page.select_option("#play-config", config)
+    page.select_option("#play-opponent", opponent)
+    page.click("#play-create")
+    page.wait_for_function("window.__view.seat() !== null", timeout=30_000)
+    page.wait_for_function("window.__view.stats().frames > 3 && window.__view.roster() !== null", timeout=60_000)
+    return page, errors
+
+
+def my_car(page) -> np.ndarray:
+    slot = page.evaluate("window.__view.seat().slot")
+    index = page.evaluate("window.__view.roster().agents").index(slot)
+    return np.array(page.evaluate("window.__view.carStates()")[index])
+
+
+def axes(car: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The car's forward and right unit vectors (game coordinates) from its quaternion: the rotation's first
+    two columns (the game's world is left-handed, so its "right" column is the car's right)."""
+    x, y, z, w = car[3:7]
+    forward = np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+    right = np.array([2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)])
+    return forward, right
+
+
+def hold(page, keys: list[str], seconds: float, sample=None) -> list:
+    """Hold ``keys`` for ``seconds``, calling ``sample()`` every 50 ms meanwhile; the samples."""
+    for key in keys:
+        page.keyboard.down(key)
+    samples, end = [], time.monotonic() + seconds
+    while time.monotonic() < end:
+        if sample is not None:
+            samples.append(sample())
+        time.sleep(0.05)
+    for key in reversed(keys):
+        page.keyboard.up(key)
+    return samples
+
+
+def test_keys_drive_the_players_car_as_commanded(stack):
+    page, errors = start_playing(stack, "matches/1v1.yaml", "scripted:idle")
+    assert page.evaluate("window.__view.seat().slot") == "blue_0"
+    assert page.evaluate("window.__view.camera()") == "chase"
+    # throttle: held until the kickoff countdown is over and the car has driven off
+    start = my_car(page)[:3]
+    page.keyboard.down("KeyW")
+    wait_for(lambda: np.linalg.norm(my_car(page)[:3] - start) > 400, 30.0, "the car to drive forward")
+    moved = my_car(page)
+    forward, right = axes(moved)
+    assert float(np.dot(moved[:3] - start, forward)) > 300  # along its nose, not backwards
+    # steer right: the nose turns towards the car's right side
+    hold(page, ["KeyD"], 0.8)
+    page.keyboard.up("KeyW")
+    turned_forward, _ = axes(my_car(page))
+    assert float(np.dot(turned_forward, right)) > 0.2, (forward, right, turned_forward)
+    print(f"\nsteering right for 0.8 s: nose {float(np.dot(turned_forward, right)):+.2f} along its former right")
+    time.sleep(1.0)  # settle on its wheels
+    # jump: off the ground, then back
+    ground_z = my_car(page)[2]
+    height = lambda: my_car(page)[2]  # noqa: E731
+    heights = hold(page, ["Space"], 0.25, height) + hold(page, [], 0.5, height)
+    assert max(heights) > ground_z + 60, (ground_z, heights)
+    time.sleep(1.5)
+    # boost: the flame on and the tank going down
+    before = my_car(page)[7]
+    boosting = hold(page, ["ShiftLeft"], 1.2, lambda: my_car(page))
+    assert any(int(c[8]) & FLAG_BOOSTING for c in boosting)
+    assert my_car(page)[7] < before - 10, (before, my_car(page)[7])
+    assert "ms" in page.inner_text("#latency")
+    page.close()
+    assert errors == []
+
+
+#: a player's steering loop, run in the page at its frame rate (a loop driven from here would react to each
+#: frame some 100 ms later and overshoot): it presses and releases keys as key events on the window, the
+#: same path as a keyboard's. Straight at a spot behind the ball on its line to the goal (the car's nose
+#: predicted a little ahead by its turn rate), powerslide round sharp turns, boost when lined up.
+PENALTY_PLAYER = """async ([index, seconds]) => {
+  const held = new Set(), goal = [0, 5200], end = performance.now() + seconds * 1000;
+  const key = (code, down) => window.dispatchEvent(new KeyboardEvent(down ? "keydown" : "keyup", { code }));
+  let lastYaw = null, lastT = null, yawRate = 0;
+  while (performance.now() < end && window.__view.score()[0] === 0) {
+    await new Promise((r) => requestAnimationFrame(r));
+    const c = window.__view.carStates()[index], b = window.__view.ballPosition(), t = performance.now() / 1000;
+    const [x, y, z, w] = c.slice(3, 7);
+    const fwd = [1 - 2 * (y * y + z * z), 2 * (x * y + w * z)], right = [2 * (x * y - w * z), 1 - 2 * (x * x + z * z)];
+    const yaw = Math.atan2(fwd[1], fwd[0]);
+    if (lastYaw !== null && t > lastT) {
+      const d = Math.atan2(Math.sin(yaw - lastYaw), Math.cos(yaw - lastYaw));
+      yawRate = 0.7 * yawRate + 0.3 * (d / (t - lastT));
+    }
+    lastYaw = yaw; lastT = t;
+    const g = [goal[0] - b[0], goal[1] - b[1]], n = Math.hypot(...g), dir = [g[0] / n, g[1] / n];
+    const dist = Math.hypot(b[0] - c[0], b[1] - c[1]), back = Math.min(0.3 * dist, 250);
+    const to = [b[0] - back * dir[0] - c[0], b[1] - back * dir[1] - c[1]];
+    // the world is left-handed: the car's right is counter-clockwise of its nose seen from above (the yaw grows)
+    const angle = Math.atan2(to[0] * right[0] + to[1] * right[1], to[0] * fwd[0] + to[1] * fwd[1]) - 0.15 * yawRate;
+    const want = new Set(["KeyW"]);
+    if (Math.abs(angle) > 0.05) want.add(angle > 0 ? "KeyD" : "KeyA");
+    if (Math.abs(angle) > 1.3) want.add("KeyX");
+    if (Math.abs(angle) < 0.1) want.add("ShiftLeft");
+    for (const k of [...held]) if (!want.has(k)) { key(k, false); held.delete(k); }
+    for (const k of want) if (!held.has(k)) { key(k, true); held.add(k); }
+  }
+  for (const k of held) key(k, false);
+  return window.__view.score();
+}"""
+
+
+def test_a_penalty_shot_from_the_keyboard_counts_as_a_goal(stack):
+    """Up to three penalties (a match each), as a player gets: the scripted player scores most of them."""
+    for attempt in range(1, 4):
+        page, errors = start_playing(stack, "minigames/penalty.yaml", "scripted:idle")
+        index = page.evaluate("window.__view.roster().agents").index(page.evaluate("window.__view.seat().slot"))
+        score = page.evaluate(PENALTY_PLAYER, [index, 12.0])
+        if score[0] >= 1:
+            break
+        page.close()
+        assert errors == []
+    assert score[0] >= 1, f"three penalties, no goal: {score}"
+    print(f"\npenalty scored from the keyboard at attempt {attempt}")
+    page.wait_for_function("document.getElementById('feed').textContent.includes('GOAL blue')", timeout=10_000)
+    page.close()
+    assert errors == []
+
+
+def test_a_page_drives_only_its_own_seat(stack):
+    socket = PageSocket(stack["url"])
+    socket.send(op="input", c=[1, 0, 0, 0, 0, -1, -1, -1], n=1)
+    assert "holds no seat" in socket.recv_type("error")["error"]
+    socket.send(op="play", config="matches/1v1.yaml", opponent="checkpoint:/etc/passwd")
+    assert "opponent" in socket.recv_type("error")["error"]
+    socket.send(op="play", config="../secret.yaml", opponent="scripted:idle")
+    assert "config" in socket.recv_type("error")["error"]
+    socket.close()
