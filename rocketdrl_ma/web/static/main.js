@@ -37,7 +37,13 @@ function onMessage(data) {
   const now = performance.now() / 1000;
   switch (message.type) {
     case "list": showList(message); break;
-    case "watching": timeline.startLive(); setTitle(`${message.kind === "train" ? "training run" : "match"} ${message.id}`); break;
+    case "watching": {
+      const mine = !!seat && seat.match === message.id;
+      timeline.startLive(mine);
+      setTitle(mine ? `you are ${seat.slot} in match ${message.id}`
+        : `${message.kind === "train" ? "training run" : "match"} ${message.id}`);
+      break;
+    }
     case "roster": setRoster(message); break;
     case "status": status = message; setTitle(); break;
     case "hint": showNotice(message.text); break;
@@ -160,7 +166,7 @@ function onSeat(message) {
   history.replaceState(null, "", `#match=${encodeURIComponent(message.match)}`);
   status = null;
   $("timeline").hidden = true;
-  timeline.startLive();
+  timeline.startLive(true);
   sent = null;
   setTitle(`you are ${message.slot} in match ${message.match}`);
   $("seat-panel").hidden = false;

@@ -83,7 +83,8 @@ export class Timeline {
   }
 
   // ------------------------------------------------------------------ live
-  startLive() { this.reset(); this.live = true; this.playing = true; }
+  // `asPlayer`: the page plays in this match (a shorter live lag)
+  startLive(asPlayer = false) { this.reset(); this.live = true; this.playing = true; this.asPlayer = asPlayer; }
 
   pushLive(frame, now) {
     const last = this.frames[this.frames.length - 1];
@@ -151,7 +152,10 @@ export class Timeline {
     if (this.live) {
       const rate = this.ticksPerS || this.tickRate;
       const quiet = now - this.lastArrival > 2.5 * this.arrivalGap + 0.05; // nothing new: show the newest
-      const target = quiet ? this.lastTick : this.lastTick - LIVE_LAG_S * rate;
+      // a player sees their car a state's interval behind the newest state: sooner, at the cost of a stutter
+      // when a state comes late; a spectator gets the smoother LIVE_LAG_S
+      const lag = this.asPlayer ? Math.min(LIVE_LAG_S, 1.1 * this.arrivalGap) : LIVE_LAG_S;
+      const target = quiet ? this.lastTick : this.lastTick - lag * rate;
       const error = target - this.playhead;
       if (Math.abs(error) > rate * 1.0) this.playhead = target; // far behind or ahead: jump
       else this.playhead += dt * rate * Math.min(2, Math.max(0.25, 1 + error / (rate * 0.25)));
