@@ -108,29 +108,41 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
 
 
 class DecisionRecorder:
-    """Writes each decision's state with every event of its decision: the published state carries only its last
-    tick's events, the decision's events message (sent right after it) all of them."""
+    """Writes each decision's state with every event of its decision. The published state carries only its last
+    tick's events; the decision's events message carries all of them, and may arrive before or after its state
+    (another key, another priority). A state is written once the next one comes (or at the end), with the events
+    of its decision and any earlier ones that came late, each event once."""
 
     def __init__(self, writer):
         self.writer = writer
-        self._held_state = None  # the newest decision's state, written once the next one comes (or at the end)
+        self._held: StateUpdate | None = None
+        self._pending: dict[int, list] = {}  # decision -> its events, until written
+        self._written: set = set()  # the events already written, by kind, tick and car
 
     def state(self, update: StateUpdate) -> None:
         self.flush()
-        self._held_state = update.state
+        self._held = update
 
     def events(self, update: EventsUpdate) -> None:
-        if self._held_state is None:
-            return  # events of a decision whose state arrived before this spectator did
-        # a late decision's events go with the next state: their ticks still say when they happened
-        merged = list(update.events)
-        merged += [e for e in self._held_state.events if e not in merged]
-        self._held_state.events = sorted(merged, key=lambda e: e.tick)
+        self._pending.setdefault(update.decision, []).extend(update.events)
 
     def flush(self) -> None:
-        if self._held_state is not None:
-            self.writer.add(self._held_state)
-            self._held_state = None
+        if self._held is None:
+            return
+        state, decision = self._held.state, self._held.decision
+        arrived = [d for d in sorted(self._pending) if d <= decision]
+        events = [e for d in arrived for e in self._pending.pop(d)]
+        if decision not in arrived:
+            events += state.events  # its decision's events message has not come: at least the last tick's
+        unique = {}
+        for event in events:
+            key = (event.kind, event.tick, getattr(event, "agent", None))
+            if key not in self._written:
+                unique.setdefault(key, event)
+        self._written.update(unique)
+        state.events = sorted(unique.values(), key=lambda e: e.tick)
+        self.writer.add(state)
+        self._held = None
 
 
 class _NoLive:

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from rocketdrl_ma.env.replay import ReplayWriter, load_replay
+from rocketdrl_ma.web.bridge import first_state_hint
 from web_helpers import REPO, Procs, cli, launch_chromium, wait_for, write_replay
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
@@ -86,23 +87,21 @@ def test_a_killed_server_shows_its_match_lost(stack, own_server):
     assert errors == []
 
 
-def test_a_silent_match_says_why_until_its_first_state(stack, own_server):
-    procs, endpoint = own_server["procs"], own_server["endpoint"]
-    procs.lobby(endpoint, "own", *LONG_MATCH, "--id", "quiet")
-    page, errors = open_page(stack["browser"], own_server["url"], "#match=quiet")
-    page.wait_for_function("document.getElementById('title').textContent.startsWith('match quiet')", timeout=30_000)
-    pid = own_server["server"].pid
-    os.kill(pid, signal.SIGSTOP)  # a server busy compiling its kernels publishes nothing, as this one
-    try:
-        page.wait_for_selector("#notice:not([hidden])", timeout=10_000)
-        assert "compiles its physics kernels" in page.inner_text("#notice")
-        assert page.evaluate("window.__view.stats().frames") == 0
-    finally:
-        os.kill(pid, signal.SIGCONT)
+def test_a_match_without_a_state_yet_says_why_until_its_first_state(stack):
+    """A match waiting for its bots publishes nothing, as a server compiling its kernels does: after 2 s the page
+    says why, and the first state takes the hint away."""
+    procs, endpoint = stack["procs"], stack["endpoint"]
+    procs.lobby(endpoint, "fixes", "create", "matches/1v1.yaml", "--mode", "realtime", "--ready-timeout", "12",
+                "--id", "quiet")
+    page, errors = open_page(stack["browser"], stack["url"], "#match=quiet")
+    page.wait_for_selector("#notice:not([hidden])", timeout=9_000)
+    assert "compiles its physics kernels" in page.inner_text("#notice")
+    assert page.evaluate("window.__view.stats().frames") == 0
     page.wait_for_function("window.__view.stats().frames > 0", timeout=60_000)
     page.wait_for_selector("#notice", state="hidden", timeout=5_000)
     page.close()
     assert errors == []
+    assert "no state yet" in first_state_hint("match", {"status": "running"})
 
 
 @pytest.fixture(scope="module")
@@ -139,6 +138,13 @@ def test_a_watched_real_time_match_keeps_its_events_in_the_replay_and_its_feed(s
     page, errors = open_replay_at_end(stack, "replays/watched.npz")
     page.wait_for_function("document.getElementById('feed').textContent.includes('GOAL')", timeout=10_000)
     assert f"GOAL {goals[0].team}" in page.inner_text("#feed")
+    # the spectator's extras: a mark per goal on the timeline, the goal's banner just after it, a name per car
+    assert page.locator("#goal-marks span").count() == len(goals)
+    after = int(next(t for t in replay.ticks if t >= goals[0].tick))
+    page.eval_on_selector("#seek", "(el, t) => { el.value = t; el.dispatchEvent(new Event('input')); }", after)
+    page.wait_for_function(f"window.__view.tick() === {after}")
+    page.wait_for_function(f"(window.__view.banner() || '').startsWith('GOAL {goals[0].team.upper()}')", timeout=5_000)
+    assert page.locator("#tags div").count() == len(page.evaluate("window.__view.roster().agents"))
     page.close()
     assert errors == []
 

@@ -45,7 +45,7 @@ function onMessage(data) {
       break;
     }
     case "roster": setRoster(message); break;
-    case "status": status = message; setTitle(); break;
+    case "status": status = message; showFinalStats(null); setTitle(); break;
     case "hint": showNotice(message.text); break;
     case "frame":
       if (noticeIsHint) showNotice(null);
@@ -58,6 +58,7 @@ function onMessage(data) {
       timeline.addEvents(message.events);
       status = { ...(status || {}), status: message.status, final: true, info: message.info || (status || {}).info };
       if (message.status === "lost" || message.status === "failed") showNotice(`match ${message.status}: ${message.error}`, false);
+      showFinalStats(message.summary);
       setTitle();
       break;
     case "replay": openReplay(message); break;
@@ -115,6 +116,7 @@ function showNotice(text, isHint = true) {
 function watch(kind, id) {
   if (seat) leaveSeat();
   showNotice(null);
+  showFinalStats(null);
   source = { kind, id };
   location.hash = `${kind}=${encodeURIComponent(id)}`;
   status = null;
@@ -127,6 +129,7 @@ function watch(kind, id) {
 function openReplayById(id) {
   if (seat) leaveSeat();
   showNotice(null);
+  showFinalStats(null);
   source = { kind: "replay", id };
   location.hash = `replay=${encodeURIComponent(id)}`;
   status = null;
@@ -228,6 +231,13 @@ function openReplay(message) {
   setTitle(`replay ${message.id} · ${message.frames.length} states`);
   const seek = $("seek");
   seek.min = timeline.firstTick; seek.max = timeline.lastTick; seek.value = timeline.firstTick;
+  const span = Math.max(1, timeline.lastTick - timeline.firstTick);
+  $("goal-marks").replaceChildren(...timeline.events.filter((e) => e.kind === "goal").map((e) => {
+    const mark = document.createElement("span");
+    mark.className = e.team; mark.title = describe(e)[0];
+    mark.style.left = `${(100 * (e.tick - timeline.firstTick)) / span}%`;
+    return mark;
+  }));
   $("timeline").hidden = false;
   $("speed").value = "1";
   timeline.speed = 1;
@@ -264,6 +274,12 @@ function setRoster(r) {
     }).filter(Boolean));
   }
   boostPanels = [...document.querySelectorAll(".car-boost")];
+  $("tags").replaceChildren(...r.agents.map((agent, i) => {
+    const tag = document.createElement("div");
+    tag.className = `t${r.teams[i]}${i === mine ? " you" : ""}`;
+    tag.textContent = i === mine ? `${agent} (you)` : r.names[i] === agent ? agent : `${r.names[i]}`;
+    return tag;
+  }));
   written.clear();
   const cams = [["broadcast", "Broadcast"], ["top", "Top-down"], ...r.agents.map((a, i) => [`chase:${i}`, `Chase ${a}`])];
   $("cameras").replaceChildren(...cams.map(([mode, label]) => {
@@ -358,6 +374,63 @@ function updateHud(s) {
   }
 }
 
+// Each car's name over it, where it is drawn (hidden for a car not drawn or behind the camera).
+const TAG_ABOVE_UU = 110;
+function updateTags(s) {
+  const tags = $("tags").children;
+  for (let i = 0; i < tags.length; i++) {
+    const car = s ? s.a[i] : null;
+    const at = car && !(car[8] & FLAG_DEMOED) && !hudHidden ? view.screenPoint([car[0], car[1], car[2] + TAG_ABOVE_UU]) : null;
+    tags[i].style.display = at ? "" : "none";
+    if (at) tags[i].style.transform = `translate(${Math.round(at[0])}px, ${Math.round(at[1])}px) translate(-50%, -100%)`;
+  }
+}
+
+// A goal's banner for 3 s of game time after it; KICKOFF while the kickoff countdown holds the cars.
+const BANNER_S = 3;
+function updateBanner(s) {
+  let text = null, cls = "", sub = "";
+  const goal = s ? timeline.shownEvents(8).filter((e) => e.kind === "goal").pop() : null;
+  if (goal && timeline.playhead - goal.tick < BANNER_S * (s.r || 120)) {
+    text = `GOAL ${goal.team.toUpperCase()}`; cls = goal.team; sub = describe(goal)[0].replace(/^GOAL \w+: /, "");
+  } else if (s && s.k) text = "KICKOFF";
+  write($("banner"), "banner", `${text}|${cls}|${sub}`, () => {
+    $("banner").hidden = !text;
+    $("banner").className = cls;
+    $("banner").textContent = text || "";
+    if (sub) { const small = document.createElement("small"); small.textContent = sub; $("banner").append(small); }
+  });
+}
+
+// The end of a match: each car's line of the summary the server sends (goals, shots, saves, touches, team play).
+const STAT_COLUMNS = [["goals", "G"], ["shots", "Sh"], ["saves", "Sv"], ["assists", "A"], ["passes", "Pass"],
+  ["demos", "Demo"], ["touches", "Touch"], ["boost_collected", "Boost"]];
+function showFinalStats(summary) {
+  const box = $("final-stats");
+  if (!summary || !summary.stats || !roster) { box.hidden = true; return; }
+  const head = document.createElement("tr");
+  head.append(...["", ...STAT_COLUMNS.map(([, label]) => label)].map((t) => { const th = document.createElement("th"); th.textContent = t; return th; }));
+  const rows = roster.agents.filter((a) => summary.stats[a]).map((agent) => {
+    const tr = document.createElement("tr");
+    tr.className = `t${roster.teams[roster.agents.indexOf(agent)]}`;
+    const name = roster.names[roster.agents.indexOf(agent)];
+    tr.append(...[name === agent ? agent : `${agent} · ${name}`, ...STAT_COLUMNS.map(([k]) => {
+      const v = summary.stats[agent][k];
+      return v === undefined ? "–" : typeof v === "number" && !Number.isInteger(v) ? v.toFixed(0) : String(v);
+    })].map((t) => { const td = document.createElement("td"); td.textContent = t; return td; }));
+    return tr;
+  });
+  const title = document.createElement("h3");
+  const score = summary.score ? `${summary.score.blue ?? summary.score[0]} – ${summary.score.orange ?? summary.score[1]}` : "";
+  title.textContent = `${summary.winner ? `${summary.winner} wins` : "draw"} ${score}`;
+  const table = document.createElement("table");
+  table.append(head, ...rows);
+  const close = document.createElement("button");
+  close.textContent = "close"; close.addEventListener("click", () => { box.hidden = true; });
+  box.replaceChildren(title, table, close);
+  box.hidden = false;
+}
+
 // ------------------------------------------------------------------------------------------- keys
 window.addEventListener("keydown", (e) => {
   if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
@@ -395,6 +468,8 @@ function loop() {
   if (shown) view.setObstacles(shown.x);
   view.draw(shown, now, dt, shown ? timeline.trail(TRAIL_POINTS, 0.6) : []);
   updateHud(shown);
+  updateTags(shown);
+  updateBanner(shown);
   stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
   stats.renders.push(now);
   while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
@@ -416,6 +491,7 @@ window.__view = {
   camera: () => view.cameraMode,
   score: () => (shown ? [...shown.s] : null),
   hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],
+  banner: () => ($("banner").hidden ? null : $("banner").textContent),
   tick: () => timeline.playhead,
   frameIndex: () => timeline.index(),
   mode: () => (source ? source.kind : null),

@@ -105,6 +105,14 @@ function makeCar(hitbox, team) {
     new THREE.MeshLambertMaterial({ color: 0x1b2330 }));
   cabin.position.set(-l * 0.1, 0, h * 0.3);
   body.add(cabin);
+  // what shows the heading at a glance: a white stripe from the cabin to a white nose
+  const white = new THREE.MeshBasicMaterial({ color: 0xf4f7fb });
+  const stripe = new THREE.Mesh(new THREE.BoxGeometry(l * 0.5, w * 0.18, h * 0.04), white);
+  stripe.position.set(l * 0.24, 0, h * 0.17);
+  body.add(stripe);
+  const nose = new THREE.Mesh(new THREE.BoxGeometry(l * 0.06, w * 0.9, h * 0.3), white);
+  nose.position.set(l * 0.49, 0, -h * 0.12);
+  body.add(nose);
   const spoiler = new THREE.Mesh(new THREE.BoxGeometry(l * 0.08, w, h * 0.12), paint);
   spoiler.position.set(-l * 0.47, 0, h * 0.32);
   body.add(spoiler);
@@ -262,7 +270,13 @@ export class View {
     });
   }
 
-  // Where a point (uu) is on the canvas, in CSS pixels from its top left.
+  // Where a game point (uu) is drawn, in CSS pixels from the canvas' top left; null when behind the camera.
+  screenPoint(point) {
+    const v = new THREE.Vector3(...toScene(...point)).project(this.camera);
+    return v.z > 1 ? null : [((v.x + 1) / 2) * this.canvas.clientWidth, ((1 - v.y) / 2) * this.canvas.clientHeight];
+  }
+
+  // Where a game point (uu) is on the canvas, in CSS pixels from its top left.
   project([x, y, z]) {
     const v = new THREE.Vector3(...toScene(x, y, z)).project(this.camera);
     return [((v.x + 1) / 2) * this.canvas.clientWidth, ((1 - v.y) / 2) * this.canvas.clientHeight];
