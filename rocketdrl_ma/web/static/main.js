@@ -204,7 +204,7 @@ function onAck(n) {
   if (ackMs.length > 50) ackMs.shift();
   const sorted = [...ackMs].sort((a, b) => a - b);
   $("latency").textContent = `input to the page server: ${sorted[Math.floor(sorted.length / 2)].toFixed(0)} ms` +
-    ` · view ${(timeline.lagS() * 1000).toFixed(0)} ms behind the server`;
+    ` · view ${(timeline.lagS() * 1000).toFixed(0)} ms behind the newest state`;
 }
 
 function showBindings() {
@@ -277,7 +277,7 @@ function setRoster(r) {
   $("tags").replaceChildren(...r.agents.map((agent, i) => {
     const tag = document.createElement("div");
     tag.className = `t${r.teams[i]}${i === mine ? " you" : ""}`;
-    tag.textContent = i === mine ? `${agent} (you)` : r.names[i] === agent ? agent : `${r.names[i]}`;
+    tag.textContent = i === mine ? `${agent} (you)` : agent;
     return tag;
   }));
   written.clear();

@@ -108,8 +108,9 @@ export class Timeline {
     while (this.events.length > 50) this.events.shift();
   }
 
-  // Live: how far behind the newest state the playhead is, in seconds of game time.
-  lagS() { return this.frames.length ? (this.lastTick - this.playhead) / (this.ticksPerS || this.tickRate) : 0; }
+  // Live: how far behind the newest state the playhead aims to be, in seconds. A player sees their car one
+  // state's interval behind (sooner, at the cost of a stutter when a state comes late); a spectator LIVE_LAG_S.
+  lagS() { return this.asPlayer ? Math.min(LIVE_LAG_S, 1.1 * this.arrivalGap) : LIVE_LAG_S; }
 
   addEvents(events) {
     const last = this.frames[this.frames.length - 1];
@@ -152,10 +153,7 @@ export class Timeline {
     if (this.live) {
       const rate = this.ticksPerS || this.tickRate;
       const quiet = now - this.lastArrival > 2.5 * this.arrivalGap + 0.05; // nothing new: show the newest
-      // a player sees their car a state's interval behind the newest state: sooner, at the cost of a stutter
-      // when a state comes late; a spectator gets the smoother LIVE_LAG_S
-      const lag = this.asPlayer ? Math.min(LIVE_LAG_S, 1.1 * this.arrivalGap) : LIVE_LAG_S;
-      const target = quiet ? this.lastTick : this.lastTick - lag * rate;
+      const target = quiet ? this.lastTick : this.lastTick - this.lagS() * rate;
       const error = target - this.playhead;
       if (Math.abs(error) > rate * 1.0) this.playhead = target; // far behind or ahead: jump
       else this.playhead += dt * rate * Math.min(2, Math.max(0.25, 1 + error / (rate * 0.25)));
