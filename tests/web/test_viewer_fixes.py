@@ -15,7 +15,7 @@ import pytest
 
 from rocketdrl_ma.env.replay import ReplayWriter, load_replay
 from rocketdrl_ma.web.bridge import first_state_hint
-from web_helpers import REPO, Procs, cli, launch_chromium, wait_for, write_replay
+from web_helpers import REPO, Procs, cli, launch_chromium, write_replay
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
 VIEWPORT = {"width": 1280, "height": 720}
