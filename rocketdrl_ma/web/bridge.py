@@ -55,6 +55,8 @@ FIRST_STATE_HINT_S = 2.0
 WATCH_OPS = ("list", "watch", "replay", "stop")
 PLAY_OPS = ("play", "input", "leave")
 OPS = WATCH_OPS + PLAY_OPS
+#: how long a stopping page server waits for each seat's thread (it ends at its match's next decision)
+SEAT_STOP_S = 2.0
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                  ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
                  ".json": "application/json", ".png": "image/png", ".svg": "image/svg+xml"}
@@ -145,6 +147,7 @@ class PageServer:
             raise ValueError(f"play: a page that drives cars is served on loopback only, not on {host!r}")
         self.play_opponents = play_opponents
         self._tickets: dict[str, dict[str, str]] = {}  # the slots' tickets of the matches created for pages
+        self._seats: set[HumanSeat] = set()  # the pages' seats, left when the page server stops
         self.make_feed, self.library = make_feed, library
         self.host, self.port, self.max_rate = host, port, float(max_rate)
         self.files = {"/": STATIC_DIR / "index.html"}
@@ -238,7 +241,12 @@ class PageServer:
         if slot is None and tickets:
             slot = next(iter(tickets))  # a match created here: its first slot (blue_0)
         seat = HumanSeat("human", feed.session, client)
-        await asyncio.to_thread(seat.start, match, slot, tickets.get(slot) if slot else None)
+        self._seats.add(seat)
+        try:
+            await asyncio.to_thread(seat.start, match, slot, tickets.get(slot) if slot else None)
+        except ValueError:
+            self._seats.discard(seat)
+            raise
         return seat
 
     # -------------------------------------------------------------------------------------------- websocket
@@ -280,6 +288,7 @@ class PageServer:
                         stop_following()
                     if op in ("play", "leave") and seat is not None:
                         seat.leave()
+                        self._seats.discard(seat)
                         seat = None
                     if op == "play":
                         seat = await self._take_seat(request)
@@ -311,6 +320,7 @@ class PageServer:
             stop_following()
             if seat is not None:
                 seat.leave()
+                self._seats.discard(seat)
 
     async def _pump(self, ws, follower, kind: str, source_id: str) -> None:
         """Send the newest state at most ``max_rate`` times a second (never two within one period), with
@@ -384,6 +394,9 @@ class PageServer:
             if ready is not None:
                 ready(self)
             await stop.wait()
+        for seat in list(self._seats):  # their threads use the feed's session: done with it before it closes
+            seat.leave()
+            await asyncio.to_thread(seat.wait, SEAT_STOP_S)
         if self._feed is not None:
             await asyncio.to_thread(self._feed.close)
             self._feed = None

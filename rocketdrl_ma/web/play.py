@@ -140,6 +140,11 @@ class HumanSeat(Bot):
     def leave(self) -> None:
         self._left.set()
 
+    def wait(self, timeout_s: float) -> None:
+        """Until the seat's thread has ended (it does at the match's next decision after ``leave``)."""
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+
     @property
     def playing(self) -> bool:
         return self._thread is not None and self._thread.is_alive() and not self._left.is_set()
