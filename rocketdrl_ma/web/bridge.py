@@ -122,6 +122,12 @@ class FrameStats:
                 "states_per_s_recent": (len(times) - 1) / span if span > 0 else None}
 
 
+def kickoff_countdown_s(game_config: object) -> float | None:
+    """The kickoff countdown of a match's config (the page counts it down), None when unknown."""
+    value = game_config.get("kickoff_countdown_s") if isinstance(game_config, dict) else None
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+
+
 def first_state_hint(kind: str, info: dict) -> str:
     """What the page says while a followed source has published no state yet."""
     if kind == "train":
@@ -329,6 +335,7 @@ class PageServer:
         cast_shown: dict | None = None
         agents: list[str] | None = None
         hint_at: float | None = time.monotonic() + FIRST_STATE_HINT_S  # None once a state came or the hint went
+        countdown_s = kickoff_countdown_s(follower.info.get("game_config"))
         shown: tuple | None = None
         events: list[GameEvent] = []
         last_sent: float | None = None
@@ -346,7 +353,7 @@ class PageServer:
                 if update.server_left and final is None and kind == "match":
                     final = await asyncio.to_thread(follower.lost_end)
                 try:
-                    cast = roster(live.state, live.names) if live is not None else None
+                    cast = roster(live.state, live.names, countdown_s=countdown_s) if live is not None else None
                 except ValueError:  # a state no match has (e.g. a car that is no blue_N/orange_N): dropped
                     live = None
                 if live is None and hint_at is not None and time.monotonic() >= hint_at:

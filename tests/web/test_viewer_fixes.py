@@ -99,6 +99,8 @@ def test_a_match_without_a_state_yet_says_why_until_its_first_state(stack):
     assert page.evaluate("window.__view.stats().frames") == 0
     page.wait_for_function("window.__view.stats().frames > 0", timeout=60_000)
     page.wait_for_selector("#notice", state="hidden", timeout=5_000)
+    # the match opens with its 3 s kickoff countdown, counted down on the banner
+    page.wait_for_function("/^KICKOFF [123]$/.test(window.__view.banner() || '')", timeout=5_000)
     page.close()
     assert errors == []
     assert "no state yet" in first_state_hint("match", {"status": "running"})

@@ -386,14 +386,28 @@ function updateTags(s) {
   }
 }
 
-// A goal's banner for 3 s of game time after it; KICKOFF while the kickoff countdown holds the cars.
+// The tick the kickoff countdown now showing began at: the first of the run of frames with the cars held.
+function kickoffStartTick() {
+  const frames = timeline.frames;
+  let i = timeline.index();
+  while (i > 0 && frames[i - 1].k) i--;
+  return frames.length ? frames[i].t : 0;
+}
+
+// A goal's banner for 3 s of game time after it; KICKOFF and the seconds left while the countdown holds the cars.
 const BANNER_S = 3;
 function updateBanner(s) {
   let text = null, cls = "", sub = "";
   const goal = s ? timeline.shownEvents(8).filter((e) => e.kind === "goal").pop() : null;
   if (goal && timeline.playhead - goal.tick < BANNER_S * (s.r || 120)) {
     text = `GOAL ${goal.team.toUpperCase()}`; cls = goal.team; sub = describe(goal)[0].replace(/^GOAL \w+: /, "");
-  } else if (s && s.k) text = "KICKOFF";
+  } else if (s && s.k) {
+    text = "KICKOFF";
+    if (roster && roster.countdown_s) {
+      const left = roster.countdown_s - (s.t - kickoffStartTick()) / (s.r || 120);
+      if (left > 0) text = `KICKOFF ${Math.ceil(left)}`;
+    }
+  }
   write($("banner"), "banner", `${text}|${cls}|${sub}`, () => {
     $("banner").hidden = !text;
     $("banner").className = cls;
