@@ -7,12 +7,15 @@ import time
 
 import numpy as np
 import pytest
+import yaml
 
-from web_helpers import PageSocket, Procs, launch_chromium, wait_for
+from ports import free_port
+from web_helpers import REPO, PageSocket, Procs, cli, launch_chromium, wait_for
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
 VIEWPORT = {"width": 1280, "height": 720}
 FLAG_BOOSTING, FLAG_ON_GROUND = 2, 8
+CHECKPOINT = "policies/checkpoints/selfplay_1v1.pt"
 
 
 @pytest.fixture(scope="module")
@@ -22,8 +25,15 @@ def stack(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("play")
     procs = Procs()
     try:
-        _, endpoint = procs.serve(tmp, name="play")
-        _, url = procs.web("--connect", endpoint, "--server", "play", "--play", "--replays", str(tmp))
+        # the loopback server's settings, with the shipped checkpoint allowed to play empty slots
+        settings = yaml.safe_load((REPO / "server" / "local.yaml").read_text())
+        settings["limits"] = {"fill": ["idle", "scripted:*", f"checkpoint:{CHECKPOINT}"]}
+        (tmp / "server.yaml").write_text(yaml.safe_dump(settings))
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        procs.start(cli("serve", str(tmp / "server.yaml"), "--listen", endpoint, "--name", "play", "--results",
+                        str(tmp / "results.sqlite"))).line("serving", 60.0)
+        _, url = procs.web("--connect", endpoint, "--server", "play", "--play", "--replays", str(tmp),
+                           "--opponent", f"checkpoint:{CHECKPOINT}")
         with sync_playwright() as playwright:
             browser = launch_chromium(playwright)
             yield {"url": url, "procs": procs, "endpoint": endpoint, "browser": browser}
@@ -194,4 +204,13 @@ def test_a_page_drives_only_its_own_seat(stack):
     assert "opponent" in socket.recv_type("error")["error"]
     socket.send(op="play", config="../secret.yaml", opponent="scripted:idle")
     assert "config" in socket.recv_type("error")["error"]
+    # a checkpoint the page server was given plays the other car; the seat is the page's
+    socket.send(op="play", config="matches/1v1.yaml", opponent=f"checkpoint:{CHECKPOINT}")
+    seat = socket.recv_type("seat", 60.0)
+    assert seat["slot"] == "blue_0"
+    info = stack["procs"].inspect(stack["endpoint"], "play", seat["match"])
+    assert info["options"]["fill"] == f"checkpoint:{CHECKPOINT}" and info["options"]["mode"] == "realtime"
+    assert info["slot_status"]["blue_0"]["bot"] == "human"
+    socket.send(op="leave")
+    assert socket.recv_type("seat")["match"] is None
     socket.close()
