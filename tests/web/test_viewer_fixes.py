@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from rocketdrl_ma.env.replay import ReplayWriter, load_replay
-from rocketdrl_ma.web.bridge import first_state_hint
 from web_helpers import REPO, Procs, cli, launch_chromium, write_replay
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
@@ -103,6 +102,7 @@ def test_a_match_without_a_state_yet_says_why_until_its_first_state(stack):
     page.wait_for_function("/^KICKOFF [123]$/.test(window.__view.banner() || '')", timeout=5_000)
     page.close()
     assert errors == []
+    from rocketdrl_ma.web.bridge import first_state_hint
     assert "no state yet" in first_state_hint("match", {"status": "running"})
 
 
