@@ -162,8 +162,9 @@ def test_feed_times_are_the_match_clock_at_the_event(stack, watched_replay):
     assert errors == []
 
 
-def test_the_chase_camera_keeps_its_car_in_view_under_a_high_ball(stack):
-    """A replay whose ball hangs 1.3-2 km over the chased car: the car stays on screen at every state."""
+def test_the_chase_camera_keeps_its_car_under_a_high_ball_and_the_orbit_camera_follows_the_mouse(stack):
+    """A replay whose ball hangs 1.3-2 km over the chased car: the car stays on screen at every state. Then the
+    orbit camera, turned by a drag and zoomed by the wheel."""
     source = load_replay(write_replay(stack["tmp"] / "ground.npz", "matches/1v1.yaml", decisions=40))
     path = stack["tmp"] / "replays" / "high_ball.npz"
     writer = ReplayWriter(str(path), meta=dict(source.meta))
@@ -192,6 +193,20 @@ def test_the_chase_camera_keeps_its_car_in_view_under_a_high_ball(stack):
         width, height = page.evaluate("[document.getElementById('view').clientWidth, "
                                       "document.getElementById('view').clientHeight]")
         assert 0 <= x <= width and 0 <= y <= height, f"state {k}: car {car} drawn at {(x, y)}, off screen"
+    # the orbit camera: a drag on the view turns it round the ball, the wheel zooms it
+    page.mouse.move(640, 360)
+    page.mouse.down()
+    page.mouse.move(760, 330, steps=4)
+    page.mouse.up()
+    assert page.evaluate("window.__view.camera()") == "orbit"
+    page.wait_for_timeout(1500)  # eased into place
+    ball = np.array(page.evaluate("window.__view.ballPosition()"))
+    turned = np.array(page.evaluate("window.__view.cameraPosition()"))
+    page.mouse.wheel(0, 300)
+    page.wait_for_timeout(1500)
+    zoomed = np.array(page.evaluate("window.__view.cameraPosition()"))
+    scene_ball = ball * [-1, 1, 1]  # the scene is the game mirrored in x
+    assert np.linalg.norm(zoomed - scene_ball) > np.linalg.norm(turned - scene_ball) + 200
     page.close()
     assert errors == []
 

@@ -281,7 +281,8 @@ function setRoster(r) {
     return tag;
   }));
   written.clear();
-  const cams = [["broadcast", "Broadcast"], ["top", "Top-down"], ...r.agents.map((a, i) => [`chase:${i}`, `Chase ${a}`])];
+  const cams = [["broadcast", "Broadcast"], ["top", "Top-down"], ["orbit", "Orbit"],
+    ...r.agents.map((a, i) => [`chase:${i}`, `Chase ${a}`])];
   $("cameras").replaceChildren(...cams.map(([mode, label]) => {
     const b = document.createElement("button");
     b.textContent = label; b.dataset.mode = mode;
@@ -452,6 +453,7 @@ window.addEventListener("keydown", (e) => {
   if (seat && controls.keyDown(e.code)) { e.preventDefault(); sendControls(); return; }
   if (e.key === "1") setCamera("broadcast");
   else if (e.key === "2") setCamera("top");
+  else if (e.key === "4") setCamera("orbit");
   else if (e.key === "3" && roster && roster.agents.length) {
     setCamera(`chase:${view.cameraMode === "chase" ? (view.chaseIndex + 1) % roster.agents.length : view.chaseIndex}`);
   } else if (e.key === " ") { togglePlay(); e.preventDefault(); }
@@ -459,6 +461,23 @@ window.addEventListener("keydown", (e) => {
   else if (e.key === "ArrowLeft") timeline.step(-1);
   else if (e.key === "h") { hudHidden = !hudHidden; $("hud").classList.toggle("hidden", hudHidden); }
 });
+
+// The orbit camera: drag on the view to turn it round the ball (a drag in another camera switches to it),
+// the wheel to zoom.
+let dragFrom = null;
+$("view").addEventListener("pointerdown", (e) => { dragFrom = [e.clientX, e.clientY]; $("view").setPointerCapture(e.pointerId); });
+$("view").addEventListener("pointerup", () => { dragFrom = null; });
+$("view").addEventListener("pointermove", (e) => {
+  if (!dragFrom) return;
+  if (view.cameraMode !== "orbit") setCamera("orbit");
+  view.turnOrbit(e.clientX - dragFrom[0], e.clientY - dragFrom[1]);
+  dragFrom = [e.clientX, e.clientY];
+});
+$("view").addEventListener("wheel", (e) => {
+  if (view.cameraMode !== "orbit") return;
+  view.zoomOrbit(Math.sign(e.deltaY));
+  e.preventDefault();
+}, { passive: false });
 
 window.addEventListener("keyup", (e) => { controls.keyUp(e.code); if (seat) sendControls(); });
 window.addEventListener("blur", () => { controls.releaseAll(); if (seat) sendControls(); });
@@ -503,6 +522,7 @@ window.__view = {
   carPositions: () => (shown ? shown.a.map((c) => (c && !(c[8] & FLAG_DEMOED) ? c.slice(0, 3) : null)) : null),
   project: (point) => view.project(point),
   camera: () => view.cameraMode,
+  cameraPosition: () => view.camera.position.toArray(),
   score: () => (shown ? [...shown.s] : null),
   hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],
   banner: () => ($("banner").hidden ? null : $("banner").textContent),

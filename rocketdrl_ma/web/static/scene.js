@@ -150,6 +150,8 @@ export class View {
     this.cameraMode = "broadcast";
     this.chaseIndex = 0;
     this.ballCam = true;
+    // the orbit camera: around the ball, turned and zoomed with the mouse (radians, uu)
+    this.orbit = { yaw: 0.6, pitch: 0.45, distance: 3200 };
     this.cars = [];
     this.roster = null;
     this.camTarget = new THREE.Vector3();
@@ -192,6 +194,14 @@ export class View {
     });
     this.chaseIndex = Math.min(this.chaseIndex, Math.max(0, this.cars.length - 1));
   }
+
+  // Turn the orbit camera by a mouse drag (CSS pixels) or zoom it by a wheel step.
+  turnOrbit(dx, dy) {
+    this.orbit.yaw -= dx * 0.006;
+    this.orbit.pitch = THREE.MathUtils.clamp(this.orbit.pitch + dy * 0.006, 0.05, 1.5);
+  }
+
+  zoomOrbit(steps) { this.orbit.distance = THREE.MathUtils.clamp(this.orbit.distance * 1.1 ** steps, 600, 12000); }
 
   setCamera(mode, index) {
     this.cameraMode = mode;
@@ -300,7 +310,12 @@ export class View {
     const follow = 1 - Math.exp(-dt * 4);
     let pos, target, up = new THREE.Vector3(0, 0, 1);
     const chased = this.cameraMode === "chase" && this.cars[this.chaseIndex];
-    if (this.cameraMode === "top") {
+    if (this.cameraMode === "orbit") {
+      const { yaw, pitch, distance } = this.orbit;
+      target = new THREE.Vector3().copy(ball);
+      pos = new THREE.Vector3(ball.x + distance * Math.cos(pitch) * Math.cos(yaw),
+        ball.y + distance * Math.cos(pitch) * Math.sin(yaw), Math.max(40, ball.z + distance * Math.sin(pitch)));
+    } else if (this.cameraMode === "top") {
       // high enough to fit the field and both goals, the field's length across the screen
       const halfLength = this.arena ? this.arena.field.extent_y + this.arena.goal.depth : 6000;
       const halfWidth = this.arena ? this.arena.field.extent_x + 200 : 4300;
