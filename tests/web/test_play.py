@@ -1,6 +1,7 @@
 """A human in a real-time match from the page, in a real headless Chromium: `rocketdrl-ma web --play` creates a
 match against bots, the page takes its slot, and key presses drive that car as commanded (throttle, steer, jump,
-boost); a penalty is shot and scored from the keyboard. The page server acts only for its page's own seat."""
+boost); a staged penalty is joined from the list and scored from the keyboard. The page server acts only for
+its page's own seat."""
 from __future__ import annotations
 
 import time
@@ -16,6 +17,8 @@ pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
 VIEWPORT = {"width": 1280, "height": 720}
 FLAG_BOOSTING, FLAG_ON_GROUND = 2, 8
 CHECKPOINT = "policies/checkpoints/selfplay_1v1.pt"
+#: a staged scene: the penalty's ball and car both on the goal's axis, the car facing it
+STAGED_PENALTY = {"ball_x_range_uu": 0.0, "car_x_range_uu": 0.0}
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +30,9 @@ def stack(tmp_path_factory):
     try:
         # the loopback server's settings, with the shipped checkpoint allowed to play empty slots
         settings = yaml.safe_load((REPO / "server" / "local.yaml").read_text())
-        settings["limits"] = {"fill": ["idle", "scripted:*", f"checkpoint:{CHECKPOINT}"]}
+        from rocketdrl_ma.server.settings import Limits
+        settings["limits"] = {"fill": ["idle", "scripted:*", f"checkpoint:{CHECKPOINT}"],
+                              "overrides": [*Limits().overrides, *STAGED_PENALTY]}
         (tmp / "server.yaml").write_text(yaml.safe_dump(settings))
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         procs.start(cli("serve", str(tmp / "server.yaml"), "--listen", endpoint, "--name", "play", "--results",
@@ -143,54 +148,27 @@ def test_keys_drive_the_players_car_as_commanded(stack):
     assert errors == []
 
 
-#: a player's steering loop, run in the page at its frame rate (a loop driven from here would react to each
-#: frame some 100 ms later and overshoot): it presses and releases keys as key events on the window, the
-#: same path as a keyboard's. Straight at a spot behind the ball on its line to the goal (the car's nose
-#: predicted a little ahead by its turn rate), powerslide round sharp turns, boost when lined up.
-PENALTY_PLAYER = """async ([index, seconds]) => {
-  const held = new Set(), goal = [0, 5200], end = performance.now() + seconds * 1000;
-  const key = (code, down) => window.dispatchEvent(new KeyboardEvent(down ? "keydown" : "keyup", { code }));
-  let lastYaw = null, lastT = null, yawRate = 0;
-  while (performance.now() < end && window.__view.score()[0] === 0) {
-    await new Promise((r) => requestAnimationFrame(r));
-    const c = window.__view.carStates()[index], b = window.__view.ballPosition(), t = performance.now() / 1000;
-    const [x, y, z, w] = c.slice(3, 7);
-    const fwd = [1 - 2 * (y * y + z * z), 2 * (x * y + w * z)], right = [2 * (x * y - w * z), 1 - 2 * (x * x + z * z)];
-    const yaw = Math.atan2(fwd[1], fwd[0]);
-    if (lastYaw !== null && t > lastT) {
-      const d = Math.atan2(Math.sin(yaw - lastYaw), Math.cos(yaw - lastYaw));
-      yawRate = 0.7 * yawRate + 0.3 * (d / (t - lastT));
-    }
-    lastYaw = yaw; lastT = t;
-    const g = [goal[0] - b[0], goal[1] - b[1]], n = Math.hypot(...g), dir = [g[0] / n, g[1] / n];
-    const dist = Math.hypot(b[0] - c[0], b[1] - c[1]), back = Math.min(0.3 * dist, 250);
-    const to = [b[0] - back * dir[0] - c[0], b[1] - back * dir[1] - c[1]];
-    // the world is left-handed: the car's right is counter-clockwise of its nose seen from above (the yaw grows)
-    const angle = Math.atan2(to[0] * right[0] + to[1] * right[1], to[0] * fwd[0] + to[1] * fwd[1]) - 0.15 * yawRate;
-    const want = new Set(["KeyW"]);
-    if (Math.abs(angle) > 0.05) want.add(angle > 0 ? "KeyD" : "KeyA");
-    if (Math.abs(angle) > 1.3) want.add("KeyX");
-    if (Math.abs(angle) < 0.1) want.add("ShiftLeft");
-    for (const k of [...held]) if (!want.has(k)) { key(k, false); held.delete(k); }
-    for (const k of want) if (!held.has(k)) { key(k, true); held.add(k); }
-  }
-  for (const k of held) key(k, false);
-  return window.__view.score();
-}"""
-
-
-def test_a_penalty_shot_from_the_keyboard_counts_as_a_goal(stack):
-    """Up to three penalties (a match each), as a player gets: the scripted player scores most of them."""
-    for attempt in range(1, 4):
-        page, errors = start_playing(stack, "minigames/penalty.yaml", "scripted:idle")
-        index = page.evaluate("window.__view.roster().agents").index(page.evaluate("window.__view.seat().slot"))
-        score = page.evaluate(PENALTY_PLAYER, [index, 12.0])
-        if score[0] >= 1:
-            break
-        page.close()
-        assert errors == []
-    assert score[0] >= 1, f"three penalties, no goal: {score}"
-    print(f"\npenalty scored from the keyboard at attempt {attempt}")
+def test_a_staged_penalty_joined_from_the_list_is_scored_from_the_keyboard(stack):
+    """An open real-time penalty with the ball and the car on the goal's axis (created by the lobby, as a match
+    organiser would), joined with the Play button beside it in the list: throttle and boost held, the car
+    drives the ball into the empty goal and the goal counts."""
+    sets = [arg for key, value in STAGED_PENALTY.items() for arg in ("--set", f"{key}={value}")]
+    stack["procs"].lobby(stack["endpoint"], "play", "create", "minigames/penalty.yaml", "--id", "staged", "--mode",
+                         "realtime", "--open", "--ready-timeout", "60", *sets)
+    page = stack["browser"].new_page(viewport=VIEWPORT)
+    errors: list[str] = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(stack["url"])
+    page.wait_for_function("window.__view && window.__view.ready", timeout=30_000)
+    page.click("#list-matches li:has-text('staged') button.join", timeout=20_000)
+    page.wait_for_function("window.__view.seat() !== null && window.__view.stats().frames > 3", timeout=60_000)
+    assert page.evaluate("window.__view.seat().match") == "staged"
+    page.keyboard.down("KeyW")
+    page.keyboard.down("ShiftLeft")
+    page.wait_for_function("window.__view.score()[0] >= 1 || window.__view.seat().ended", timeout=20_000)
+    page.keyboard.up("ShiftLeft")
+    page.keyboard.up("KeyW")
+    assert page.evaluate("window.__view.score()")[0] == 1
     page.wait_for_function("document.getElementById('feed').textContent.includes('GOAL blue')", timeout=10_000)
     page.close()
     assert errors == []
