@@ -22,8 +22,19 @@ def _run_web(args: argparse.Namespace) -> int:
         settings = None if args.no_zenoh else _client_settings(args)
         make_feed = None if settings is None else (lambda: SpectatorFeed(settings))
         library = ReplayLibrary(args.replays if args.replays is not None else ["runs"], args.replay or [])
+        opponents = None
+        if args.play:
+            from rocketdrl_ma.web.play import opponent_choices
+            if settings is None:
+                raise ValueError("--play: needs a match server (drop --no-zenoh)")
+            for spec in args.opponent or []:
+                if not spec.startswith("checkpoint:"):
+                    raise ValueError(f"--opponent: expected checkpoint:PATH (scripted bots are offered anyway), "
+                                     f"got {spec!r}")
+            opponents = opponent_choices(args.opponent or [])
         server = PageServer(make_feed, library, host=args.host, port=args.port, max_rate=args.max_rate,
-                            node_modules=Path(args.node_modules) if args.node_modules else None)
+                            node_modules=Path(args.node_modules) if args.node_modules else None,
+                            play_opponents=opponents)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -31,6 +42,7 @@ def _run_web(args: argparse.Namespace) -> int:
     def ready(s: PageServer) -> None:
         where = "no Zenoh" if settings is None else \
             f"match server {settings.server!r} via {list(settings.zenoh.connect)} as {settings.user_name}"
+        where += "; play on" if opponents is not None else ""
         print(f"page at {s.url()} ({where}; replays from {[str(f) for f in library.folders + library.files]})",
               flush=True)
 
@@ -51,5 +63,10 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
                    help="a folder whose .npz replays the page lists (repeatable; default: runs)")
     w.add_argument("--replay", action="append", default=None, help="one more replay file to list (repeatable)")
     w.add_argument("--max-rate", type=float, default=30.0, help="states per second sent to a page (at most 30)")
+    w.add_argument("--play", action="store_true",
+                   help="let the page play: join a real-time match's free slot, or create one against bots "
+                        "(loopback only; creating needs the server's admin secret, found from its folder)")
+    w.add_argument("--opponent", action="append", default=None,
+                   help="a checkpoint:PATH the page may play against (repeatable; scripted bots are offered anyway)")
     w.add_argument("--node-modules", default=None, help="where `npm ci` installed three.js (default: the repo's)")
     w.set_defaults(run=_run_web)

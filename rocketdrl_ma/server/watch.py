@@ -74,16 +74,21 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
             latest, recent, final = None, [], None
             with Live(scoreboard(match, None, recent), console=console, auto_refresh=False,
                       transient=False) if live else _NoLive() as view:
+                recorder = DecisionRecorder(writer) if writer is not None else None
                 for update in spectator.updates(timeout_s):
                     if isinstance(update, StateUpdate):
                         latest = update
-                        if writer is not None:
-                            writer.add(update.state)
+                        if recorder is not None:
+                            recorder.state(update)
                     elif isinstance(update, EventsUpdate):
                         recent += [describe_event(e) for e in update.events if e.kind in SHOWN_EVENTS]
+                        if recorder is not None:
+                            recorder.events(update)
                     else:
                         final = update
                     view.update(scoreboard(match, latest, recent), refresh=True)
+                if recorder is not None:
+                    recorder.flush()
             if live:
                 console.line()  # the live view leaves its cursor at the end of its last line
             if spectator.dropped:
@@ -100,6 +105,44 @@ def watch(match: str, *, client: ClientSettings | None = None, video: str | None
             for name in os.listdir(tmp_dir):
                 os.remove(os.path.join(tmp_dir, name))
             os.rmdir(tmp_dir)
+
+
+class DecisionRecorder:
+    """Writes each decision's state with every event of its decision. The published state carries only its last
+    tick's events; the decision's events message carries all of them, and may arrive before or after its state
+    (another key, another priority). A state is written once the next one comes (or at the end), with the events
+    of its decision and any earlier ones that came late, each event once."""
+
+    def __init__(self, writer):
+        self.writer = writer
+        self._held: StateUpdate | None = None
+        self._pending: dict[int, list] = {}  # decision -> its events, until written
+        self._written: set = set()  # the events already written, by kind, tick and car
+
+    def state(self, update: StateUpdate) -> None:
+        self.flush()
+        self._held = update
+
+    def events(self, update: EventsUpdate) -> None:
+        self._pending.setdefault(update.decision, []).extend(update.events)
+
+    def flush(self) -> None:
+        if self._held is None:
+            return
+        state, decision = self._held.state, self._held.decision
+        arrived = [d for d in sorted(self._pending) if d <= decision]
+        events = [e for d in arrived for e in self._pending.pop(d)]
+        if decision not in arrived:
+            events += state.events  # its decision's events message has not come: at least the last tick's
+        unique = {}
+        for event in events:
+            key = (event.kind, event.tick, getattr(event, "agent", None))
+            if key not in self._written:
+                unique.setdefault(key, event)
+        self._written.update(unique)
+        state.events = sorted(unique.values(), key=lambda e: e.tick)
+        self.writer.add(state)
+        self._held = None
 
 
 class _NoLive:

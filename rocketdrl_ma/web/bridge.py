@@ -8,8 +8,15 @@ The websocket speaks JSON requests in and msgpack messages out (``frames.py``). 
     {"op": "replay", "id"}                          -> {"type": "replay", "roster", "frames", ...}
     {"op": "stop"}                                  -> stops following
 
-Read-only by construction: the page server never joins a match, never sends an action and publishes
-nothing on Zenoh; no request can reach a car. Requests for anything else get an error message.
+With ``play`` (``rocketdrl-ma web --play``, loopback only) a page may also take a seat (``play.py``):
+
+    {"op": "play", "match": id[, "slot"]}          -> {"type": "seat", ...}, then follows the match
+    {"op": "play", "config", "opponent"}            -> creates a real-time match against bots, then as above
+    {"op": "input", "c": [8 controls], "n": seq}    -> drives this page's own seat; {"type": "ack", "n"}
+    {"op": "leave"}                                 -> gives the seat up (so does closing the page)
+
+Without it the page server is read-only by construction: it never joins a match, never sends an action and
+publishes nothing on Zenoh; no request can reach a car. Requests for anything else get an error message.
 The page's own origin is the only one allowed to open the websocket, and the Host header must name the
 address the server listens on (no DNS rebinding onto a loopback page server).
 """
@@ -26,12 +33,16 @@ from pathlib import Path
 from typing import Callable
 
 from rocketdrl_ma.config import REPO_ROOT
+from rocketdrl_ma.physics.compile_notice import COLD_COMPILE_ESTIMATE_S
 from rocketdrl_ma.rules.events import GameEvent
+from rocketdrl_ma.server.client import LobbyClient, resolve_client
 from rocketdrl_ma.server.protocol import ENDED_STATUSES
+from rocketdrl_ma.validation import check_name
 
 from .arena import arena_json
 from .feed import SOURCE_KINDS, FeedUpdate, Follower, SpectatorFeed
 from .frames import feed_events, frame, pack_message, roster
+from .play import PLAY_CONFIGS, HumanSeat, create_match
 from .replays import ReplayLibrary
 
 log = logging.getLogger(__name__)
@@ -39,6 +50,13 @@ STATIC_DIR = Path(__file__).parent / "static"
 PACKAGED_VENDOR_DIR = Path(__file__).parent / "vendor"  # in a wheel: the page's npm files, node_modules' layout
 MAX_STATES_PER_S = 30.0
 MAX_REQUEST_BYTES = 64 * 1024
+#: a followed source with no state after this long gets a hint on the page (kernels compiling, bots joining)
+FIRST_STATE_HINT_S = 2.0
+WATCH_OPS = ("list", "watch", "replay", "stop")
+PLAY_OPS = ("play", "input", "leave")
+OPS = WATCH_OPS + PLAY_OPS
+#: how long a stopping page server waits for each seat's thread (it ends at its match's next decision)
+SEAT_STOP_S = 2.0
 CONTENT_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                  ".mjs": "text/javascript; charset=utf-8", ".css": "text/css; charset=utf-8",
                  ".json": "application/json", ".png": "image/png", ".svg": "image/svg+xml"}
@@ -104,15 +122,38 @@ class FrameStats:
                 "states_per_s_recent": (len(times) - 1) / span if span > 0 else None}
 
 
+def kickoff_countdown_s(game_config: object) -> float | None:
+    """The kickoff countdown of a match's config (the page counts it down), None when unknown."""
+    value = game_config.get("kickoff_countdown_s") if isinstance(game_config, dict) else None
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+
+
+def first_state_hint(kind: str, info: dict) -> str:
+    """What the page says while a followed source has published no state yet."""
+    if kind == "train":
+        return "waiting for the run's next evaluation episode"
+    compiling = (f"a match server's first match compiles its physics kernels first (once per machine, "
+                 f"~{COLD_COMPILE_ESTIMATE_S} s or more on a busy machine; `rocketdrl-ma warmup` does it ahead)")
+    if info.get("status") == "waiting":
+        return f"waiting for the match to start (its bots joining, or its ready timeout); then {compiling}"
+    return f"no state yet: {compiling}"
+
+
 class PageServer:
     """``await PageServer(...).serve(stop)`` serves until ``stop`` is set. ``feed`` opens lazily (and again
     after a failure), so the page works for replays with no match server up."""
 
     def __init__(self, make_feed: Callable[[], SpectatorFeed] | None, library: ReplayLibrary, *,
                  host: str = "127.0.0.1", port: int = 8765, max_rate: float = MAX_STATES_PER_S,
-                 node_modules: Path | None = None):
+                 node_modules: Path | None = None, play_opponents: list[str] | None = None):
+        """``play_opponents``: the policies a page may play against (``play.opponent_choices``); None: no play."""
         if not 0 < max_rate <= MAX_STATES_PER_S:
             raise ValueError(f"max_rate: states per second in (0, {MAX_STATES_PER_S:g}], got {max_rate!r}")
+        if play_opponents is not None and not is_loopback_host(host):
+            raise ValueError(f"play: a page that drives cars is served on loopback only, not on {host!r}")
+        self.play_opponents = play_opponents
+        self._tickets: dict[str, dict[str, str]] = {}  # the slots' tickets of the matches created for pages
+        self._seats: set[HumanSeat] = set()  # the pages' seats, left when the page server stops
         self.make_feed, self.library = make_feed, library
         self.host, self.port, self.max_rate = host, port, float(max_rate)
         self.files = {"/": STATIC_DIR / "index.html"}
@@ -179,15 +220,47 @@ class PageServer:
             matches, training = await asyncio.gather(asyncio.to_thread(feed.matches),
                                                      asyncio.to_thread(feed.training_runs))
         replays = await asyncio.to_thread(self.library.list)  # walks folders: off the event loop
-        return {"type": "list", "matches": matches, "training": training, "replays": replays,
+        play = None
+        if self.play_opponents is not None and feed is not None:
+            play = {"configs": list(PLAY_CONFIGS), "opponents": self.play_opponents}
+        return {"type": "list", "matches": matches, "training": training, "replays": replays, "play": play,
                 "zenoh": {"server": feed.server if feed else None, "error": self._feed_error,
                           "connected": feed is not None}}
+
+    async def _take_seat(self, request: dict) -> HumanSeat:
+        """Seat this page in a match (created for it when the request names a config): ValueError if refused."""
+        feed = await self._get_feed()
+        if feed is None:
+            raise ValueError(f"zenoh: no match server reachable ({self._feed_error})")
+        client = resolve_client(None, server=feed.server, zenoh=feed.settings)
+        if "config" in request:
+            lobby = LobbyClient(feed.session, client)
+            created = await asyncio.to_thread(create_match, lobby, request.get("config"), request.get("opponent"),
+                                              self.play_opponents)
+            match, slot = created["id"], request.get("slot")
+            self._tickets[match] = dict(created.get("tickets") or {})
+        else:
+            match, slot = check_name("match", request.get("match")), request.get("slot")
+        if slot is not None:
+            slot = check_name("slot", slot)
+        tickets = self._tickets.get(match, {})
+        if slot is None and tickets:
+            slot = next(iter(tickets))  # a match created here: its first slot (blue_0)
+        seat = HumanSeat("human", feed.session, client)
+        self._seats.add(seat)
+        try:
+            await asyncio.to_thread(seat.start, match, slot, tickets.get(slot) if slot else None)
+        except ValueError:
+            self._seats.discard(seat)
+            raise
+        return seat
 
     # -------------------------------------------------------------------------------------------- websocket
     async def _handler(self, ws) -> None:
         # the source this page follows: the task pumping it, and its follower (closed here too, since a task
         # cancelled before it first ran never reaches its own clean-up)
         follow: tuple[asyncio.Task, Follower] | None = None
+        seat: HumanSeat | None = None  # this page's own slot, if it plays
 
         def stop_following() -> None:
             nonlocal follow
@@ -205,9 +278,35 @@ class PageServer:
                     if not isinstance(request, dict):
                         raise ValueError("request: expected a JSON object")
                     op = request.get("op")
-                    if op in ("watch", "replay", "stop"):
+                    if op not in (OPS if self.play_opponents is not None else WATCH_OPS):
+                        raise ValueError(f"op: {op!r} is not one of {list(WATCH_OPS)}" + (
+                            f" or {list(PLAY_OPS)}" if self.play_opponents is not None else
+                            " (the page is read-only; `rocketdrl-ma web --play` lets it play)"))
+                    if op == "input":
+                        if seat is None:
+                            raise ValueError("input: this page holds no seat (play first)")
+                        if not seat.playing:  # the match just ended: the page learns it from the final message
+                            continue
+                        seat.set_controls(request.get("c"))
+                        await ws.send(pack_message({"type": "ack", "n": request.get("n")}))
+                        continue
+                    if op in ("watch", "replay", "stop", "play", "leave"):
                         stop_following()
-                    if op == "list":
+                    if op in ("play", "leave") and seat is not None:
+                        seat.leave()
+                        self._seats.discard(seat)
+                        seat = None
+                    if op == "play":
+                        seat = await self._take_seat(request)
+                        join = seat.join_info
+                        await ws.send(pack_message({"type": "seat", "match": join.match, "slot": join.slot,
+                                                    "status": join.status, "decision_ticks": join.decision_ticks}))
+                        feed = await self._get_feed()
+                        follower = await asyncio.to_thread(feed.follow, "match", join.match)
+                        follow = (asyncio.create_task(self._pump(ws, follower, "match", join.match)), follower)
+                    elif op == "leave":
+                        await ws.send(pack_message({"type": "seat", "match": None, "slot": None}))
+                    elif op == "list":
                         await ws.send(pack_message(await self._list()))
                     elif op == "watch":
                         kind, source_id = request.get("kind"), request.get("id")
@@ -221,21 +320,22 @@ class PageServer:
                     elif op == "replay":
                         reply = await asyncio.to_thread(self.library.open, request.get("id"))
                         await ws.send(pack_message(reply))
-                    elif op == "stop":
-                        pass
-                    else:
-                        raise ValueError(f"op: {op!r} is not one of ['list', 'watch', 'replay', 'stop'] "
-                                         "(the page is read-only)")
                 except (ValueError, json.JSONDecodeError) as e:
                     await ws.send(pack_message({"type": "error", "error": str(e)}))
         finally:
             stop_following()
+            if seat is not None:
+                seat.leave()
+                self._seats.discard(seat)
 
     async def _pump(self, ws, follower, kind: str, source_id: str) -> None:
         """Send the newest state at most ``max_rate`` times a second (never two within one period), with
         every event since the last one."""
         period = 1.0 / self.max_rate
+        cast_shown: dict | None = None
         agents: list[str] | None = None
+        hint_at: float | None = time.monotonic() + FIRST_STATE_HINT_S  # None once a state came or the hint went
+        countdown_s = kickoff_countdown_s(follower.info.get("game_config"))
         shown: tuple | None = None
         events: list[GameEvent] = []
         last_sent: float | None = None
@@ -249,14 +349,20 @@ class PageServer:
             while True:
                 update: FeedUpdate = follower.poll()
                 events += update.events
-                live = update.state
+                live, final = update.state, update.final
+                if update.server_left and final is None and kind == "match":
+                    final = await asyncio.to_thread(follower.lost_end)
                 try:
-                    cast = roster(live.state, live.names) if live is not None else None
+                    cast = roster(live.state, live.names, countdown_s=countdown_s) if live is not None else None
                 except ValueError:  # a state no match has (e.g. a car that is no blue_N/orange_N): dropped
                     live = None
+                if live is None and hint_at is not None and time.monotonic() >= hint_at:
+                    hint_at = None
+                    await ws.send(pack_message({"type": "hint", "text": first_state_hint(kind, follower.info)}))
                 if live is not None:
-                    if cast["agents"] != agents:
-                        agents = cast["agents"]
+                    hint_at = None
+                    if cast != cast_shown:  # new cars, or new names (a training run's next iteration)
+                        cast_shown, agents = cast, cast["agents"]
                         await ws.send(pack_message(cast))
                     status = (live.status, live.info.get("iteration"), live.info.get("run"))
                     if status != shown:
@@ -269,8 +375,8 @@ class PageServer:
                     self.stats.add(len(payload), len(agents), None if last_sent is None else now - last_sent)
                     last_sent = now
                     await ws.send(payload)
-                if update.final is not None:
-                    final = {k: update.final.get(k) for k in ("status", "summary", "result_key", "info", "error")}
+                if final is not None:
+                    final = {k: final.get(k) for k in ("status", "summary", "result_key", "info", "error")}
                     await ws.send(pack_message({"type": "final", "events": feed_events(events), **final}))
                     events = []
                     if kind == "match":
@@ -295,6 +401,9 @@ class PageServer:
             if ready is not None:
                 ready(self)
             await stop.wait()
+        for seat in list(self._seats):  # their threads use the feed's session: done with it before it closes
+            seat.leave()
+            await asyncio.to_thread(seat.wait, SEAT_STOP_S)
         if self._feed is not None:
             await asyncio.to_thread(self._feed.close)
             self._feed = None

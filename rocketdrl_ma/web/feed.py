@@ -27,6 +27,8 @@ SOURCE_KINDS = ("match", "train")
 MAX_STATE_BYTES = 16 * 1024 * 1024
 #: unread state payloads kept between polls: the newest one that opens is shown
 KEPT_STATES = 64
+#: the page's status of a match whose server went away without ending it (killed, or its machine gone)
+LOST_STATUS = "lost"
 
 
 def _plain(payload: bytes, kind: str) -> dict | None:
@@ -62,6 +64,7 @@ class FeedUpdate:
     events: list[GameEvent]
     final: dict | None
     errors: int  # payloads that did not decode (dropped)
+    server_left: bool = False  # the match server's liveliness token went away since the last poll
 
 
 class Follower:
@@ -73,8 +76,36 @@ class Follower:
         self._lock = threading.Lock()
         self._states: list[bytes] = []
         self._events: list[bytes] = []
+        self._server_left = False
+        self.lobby: LobbyClient | None = None  # a match's lobby, asked whether a silent server is gone
         self._declared = [session.declare_subscriber(state_key, self._on_state),
                           session.declare_subscriber(events_key, self._on_events)]
+
+    def watch_server(self, session, alive_key: str) -> None:
+        """Note when the server's liveliness token goes away (a killed server ends no match by itself)."""
+        from zenoh import SampleKind
+
+        def on_alive(sample) -> None:
+            if sample.kind == SampleKind.DELETE:
+                with self._lock:
+                    self._server_left = True
+        self._declared.append(session.liveliness().declare_subscriber(alive_key, on_alive, history=True))
+
+    def lost_end(self) -> dict | None:
+        """After the server's token went away (anyone may drop one on that key): the final message of a match
+        whose server no longer answers, None while it still does (ask again at the next token loss)."""
+        try:
+            info = self.lobby.inspect(self.info["id"], retry_s=0.0)
+        except ServerGone as e:
+            return {"final": True, "status": LOST_STATUS, "summary": None, "result_key": None, "info": {},
+                    "error": f"the match server stopped answering ({e})"}
+        except ServerError:  # the server was restarted and no longer knows the match
+            return {"final": True, "status": LOST_STATUS, "summary": None, "result_key": None, "info": {},
+                    "error": "the match server no longer knows this match (restarted?)"}
+        if info.get("instance") != self.info.get("instance"):
+            return {"final": True, "status": LOST_STATUS, "summary": None, "result_key": None, "info": {},
+                    "error": "the match server restarted: this match is gone"}
+        return None
 
     def _on_state(self, sample) -> None:
         payload = sample.payload.to_bytes()
@@ -90,6 +121,7 @@ class Follower:
     def poll(self) -> FeedUpdate:
         with self._lock:
             raw_states, raw_events, self._states, self._events = self._states, self._events, [], []
+            server_left, self._server_left = self._server_left, False
         errors, state, events, final = 0, None, [], None
         for raw in reversed(raw_states):  # the newest state that opens; older ones are not shown anyway
             message = self.opener(raw, "state")
@@ -117,7 +149,7 @@ class Follower:
                 events += decode_events(message.get("events") or ())
             except ProtocolError:
                 errors += 1
-        return FeedUpdate(state, events, final, errors)
+        return FeedUpdate(state, events, final, errors, server_left)
 
     def close(self) -> None:
         for declared in reversed(self._declared):
@@ -183,6 +215,8 @@ class SpectatorFeed:
                 follower.close()
                 raise ValueError(str(e)) from None
             follower.opener = _sealed(lobby, follower.info)
+            follower.lobby = lobby
+            follower.watch_server(self.session, self.keys.server_alive)
             return follower
         user, _, run = source_id.rpartition(".")
         user = user or self.client.user_name

@@ -14,7 +14,8 @@ boost 0-100 and ``flags`` (``FLAG_*``). Events are the ones worth a line in the 
 trimmed to their fields.
 
 The *roster* (``{"type": "roster", "agents", "teams", "hitboxes", ...}``) names the cars and their hitbox
-(length, width, height, offset x, y, z in uu) so the page builds each car once.
+(length, width, height, offset x, y, z in uu) so the page builds each car once, and ``countdown_s``, the
+match's kickoff countdown when the page server knows it (the page counts it down).
 """
 from __future__ import annotations
 

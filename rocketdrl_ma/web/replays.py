@@ -65,7 +65,9 @@ def _replay_message(path: str, mtime_ns: int, name: str) -> dict:
     if len(replay) == 0:
         raise ValueError(f"replay: {name!r} holds no states")
     first = replay.state(0)
-    cast = roster(first)
+    config = replay.meta.get("config") if isinstance(replay.meta, dict) else None
+    countdown = config.get("kickoff_countdown_s") if isinstance(config, dict) else None
+    cast = roster(first, countdown_s=float(countdown) if isinstance(countdown, (int, float)) else None)
     agents = cast["agents"]
     frames = [frame(state, agents, state.events) for state in replay]
     return {"type": "replay", "id": name, "roster": cast, "frames": frames,

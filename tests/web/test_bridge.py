@@ -75,7 +75,9 @@ def test_a_fast_4v4_reaches_the_page_at_most_30_states_a_second_under_2kb(stack)
 
 def test_the_page_is_read_only_and_refuses_other_origins_and_hosts(stack):
     page = PageSocket(stack["url"])
-    for request in ({"op": "join", "match": "fast"}, {"op": "act", "action": [1, 0, 0]}, {"op": "create"}):
+    for request in ({"op": "join", "match": "fast"}, {"op": "act", "action": [1, 0, 0]}, {"op": "create"},
+                    {"op": "play", "config": "matches/1v1.yaml", "opponent": "scripted:idle"},
+                    {"op": "input", "c": [1, 0, 0, 0, 0, -1, -1, -1]}):
         page.send(**request)
         reply = page.recv_type("error")
         assert "read-only" in reply["error"]

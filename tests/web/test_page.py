@@ -79,6 +79,8 @@ def test_live_match_hud_score_equals_the_server_scoreboard_after_a_goal(stack):
     scoring_teams = [team for team, goals in zip(("blue", "orange"), expected) if goals]
     assert all(f"GOAL {team}" in feed for team in scoring_teams) and any(agent in feed for agent in scorers), feed
     assert page.inner_text("#title").endswith("finished")
+    page.wait_for_selector("#final-stats:not([hidden])", timeout=10_000)  # the end-of-match table
+    assert all(agent in page.inner_text("#final-stats") for agent in scorers)
     stats = page.evaluate("window.__view.stats()")
     print(f"\nlive 2v2 in headless chromium (SwiftShader): {stats['fps']:.1f} fps, states received "
           f"{stats['frames']}, largest {stats['bytesMax']} bytes, page loop {stats['loopMs']:.2f} ms/frame")

@@ -1,6 +1,8 @@
 // The page: lists what can be watched, follows one source over the websocket, draws it and its HUD.
-// Read-only: the only requests it can send are list, watch, replay and stop.
+// Watching sends only list, watch, replay and stop; a page server started with --play also takes a seat
+// for this page (play, then input: its own car's controls, and leave).
 import { decode } from "@msgpack/msgpack";
+import { BINDABLE, Controls } from "./play.js";
 import { TRAIL_POINTS, View } from "./scene.js";
 import { FLAG_DEMOED, Timeline } from "./timeline.js";
 
@@ -10,6 +12,11 @@ const timeline = new Timeline();
 const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
 let boostPanels = [];
 let socket = null, roster = null, source = null, lastList = null, status = null, hudHidden = false;
+const controls = new Controls();
+// this page's seat: {match, slot}; sent: the last controls sent and when each unanswered input left
+let seat = null, sent = null, inputSeq = 0, rebinding = null;
+const inputSentAt = new Map(), ackMs = [];
+controls.onBallCam = () => { view.ballCam = !view.ballCam; markCamera(); };
 
 // ------------------------------------------------------------------------------------------- websocket
 function send(request) { if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(request)); }
@@ -30,20 +37,33 @@ function onMessage(data) {
   const now = performance.now() / 1000;
   switch (message.type) {
     case "list": showList(message); break;
-    case "watching": timeline.startLive(); setTitle(`${message.kind === "train" ? "training run" : "match"} ${message.id}`); break;
+    case "watching": {
+      const mine = !!seat && seat.match === message.id;
+      timeline.startLive(mine);
+      setTitle(mine ? `you are ${seat.slot} in match ${message.id}`
+        : `${message.kind === "train" ? "training run" : "match"} ${message.id}`);
+      break;
+    }
     case "roster": setRoster(message); break;
-    case "status": status = message; setTitle(); break;
+    case "status": status = message; showFinalStats(null); setTitle(); break;
+    case "hint": showNotice(message.text); break;
     case "frame":
+      if (noticeIsHint) showNotice(null);
       stats.frames += 1; stats.bytesLast = data.byteLength; stats.bytesMax = Math.max(stats.bytesMax, data.byteLength);
       stats.arrivals.push(now);
       timeline.pushLive(message, now);
       break;
     case "final":
+      if (seat) seat.ended = true;
       timeline.addEvents(message.events);
       status = { ...(status || {}), status: message.status, final: true, info: message.info || (status || {}).info };
+      if (message.status === "lost" || message.status === "failed") showNotice(`match ${message.status}: ${message.error}`, false);
+      showFinalStats(message.summary);
       setTitle();
       break;
     case "replay": openReplay(message); break;
+    case "seat": onSeat(message); break;
+    case "ack": onAck(message.n); break;
     case "error": console.warn(`page server: ${message.error}`); setTitle(`error: ${message.error}`); break;
     default: console.warn(`page server: unknown message ${message.type}`);
   }
@@ -65,9 +85,18 @@ function showList(list) {
   $("connection").textContent = z.connected ? `match server "${z.server}"` : (z.error ? "no match server reachable" : "replays only");
   const isActive = (kind, id) => source && source.kind === kind && source.id === id;
   const score = (s) => (s ? ` ${s.blue ?? s[0]}-${s.orange ?? s[1]}` : "");
-  $("list-matches").replaceChildren(...(list.matches.length ? list.matches.map((m) =>
-    item(m.id, `${m.status} · ${m.mode} · ${m.config}${score(m.score)}`, isActive("match", m.id),
-      () => watch("match", m.id))) : [item("none", null, false, () => {})]));
+  $("list-matches").replaceChildren(...(list.matches.length ? list.matches.map((m) => {
+    const li = item(m.id, `${m.status} · ${m.mode} · ${m.config}${score(m.score)}`, isActive("match", m.id),
+      () => watch("match", m.id));
+    if (list.play && m.mode === "realtime" && m.status === "waiting") {
+      const join = document.createElement("button");
+      join.textContent = "Play"; join.className = "join";
+      join.addEventListener("click", (e) => { e.stopPropagation(); play({ match: m.id }); });
+      li.append(join);
+    }
+    return li;
+  }) : [item("none", null, false, () => {})]));
+  showPlayChoices(list.play);
   $("list-training").replaceChildren(...(list.training.length ? list.training.map((r) =>
     item(r.id, "publishing evaluation episodes", isActive("train", r.id), () => watch("train", r.id)))
     : [item("none", null, false, () => {})]));
@@ -76,7 +105,18 @@ function showList(list) {
       isActive("replay", r.id), () => openReplayById(r.id))) : [item("none", null, false, () => {})]));
 }
 
+// One line over the arena: a hint while nothing is shown yet (cleared by the first frame), or how a match was lost.
+let noticeIsHint = false;
+function showNotice(text, isHint = true) {
+  $("notice").hidden = !text;
+  $("notice").textContent = text || "";
+  noticeIsHint = !!text && isHint;
+}
+
 function watch(kind, id) {
+  if (seat) leaveSeat();
+  showNotice(null);
+  showFinalStats(null);
   source = { kind, id };
   location.hash = `${kind}=${encodeURIComponent(id)}`;
   status = null;
@@ -87,6 +127,9 @@ function watch(kind, id) {
 }
 
 function openReplayById(id) {
+  if (seat) leaveSeat();
+  showNotice(null);
+  showFinalStats(null);
   source = { kind: "replay", id };
   location.hash = `replay=${encodeURIComponent(id)}`;
   status = null;
@@ -102,6 +145,84 @@ function openFromHash() {
   if (m[1] === "replay") openReplayById(id); else watch(m[1], id);
 }
 
+// ------------------------------------------------------------------------------------------- play
+function showPlayChoices(play) {
+  $("play-panel").hidden = !play;
+  if (!play) return;
+  const fill = (select, values) => {
+    if (select.options.length === values.length) return; // keep the user's choice across list refreshes
+    select.replaceChildren(...values.map((v) => { const o = document.createElement("option"); o.value = o.textContent = v; return o; }));
+  };
+  fill($("play-config"), play.configs);
+  fill($("play-opponent"), play.opponents);
+}
+
+function play(request) {
+  setTitle(request.match ? `joining match ${request.match}…` : "creating a match…");
+  send({ op: "play", ...request });
+}
+
+function onSeat(message) {
+  if (!message.match) { seat = null; $("seat-panel").hidden = true; return; }
+  seat = { match: message.match, slot: message.slot, ended: false };
+  source = { kind: "match", id: message.match };
+  history.replaceState(null, "", `#match=${encodeURIComponent(message.match)}`);
+  status = null;
+  $("timeline").hidden = true;
+  timeline.startLive(true);
+  sent = null;
+  setTitle(`you are ${message.slot} in match ${message.match}`);
+  $("seat-panel").hidden = false;
+  showBindings();
+  if (lastList) showList(lastList);
+}
+
+function leaveSeat() {
+  send({ op: "leave" });
+  seat = null;
+  controls.releaseAll();
+  $("seat-panel").hidden = true;
+}
+
+// Send the controls when they change (the server keeps applying the last ones).
+function sendControls() {
+  if (!seat || seat.ended) return;
+  const c = controls.read();
+  const key = c.join(",");
+  if (key === sent) return;
+  sent = key;
+  inputSeq += 1;
+  inputSentAt.set(inputSeq, performance.now());
+  send({ op: "input", c, n: inputSeq });
+}
+
+function onAck(n) {
+  const at = inputSentAt.get(n);
+  inputSentAt.delete(n);
+  if (at === undefined) return;
+  ackMs.push(performance.now() - at);
+  if (ackMs.length > 50) ackMs.shift();
+  const sorted = [...ackMs].sort((a, b) => a - b);
+  $("latency").textContent = `input to the page server: ${sorted[Math.floor(sorted.length / 2)].toFixed(0)} ms` +
+    ` · view ${(timeline.lagS() * 1000).toFixed(0)} ms behind the newest state`;
+}
+
+function showBindings() {
+  const pretty = (code) => code.replace(/^Key/, "").replace(/^Digit/, "");
+  $("bindings").replaceChildren(...BINDABLE.map(([action, label]) => {
+    const li = document.createElement("li");
+    const b = document.createElement("button");
+    b.textContent = rebinding === action ? "press a key…" : pretty(controls.keys[action]);
+    b.addEventListener("click", () => { rebinding = action; showBindings(); });
+    li.append(b, ` ${label}`);
+    return li;
+  }));
+}
+
+$("play-create").addEventListener("click", () => play({ config: $("play-config").value, opponent: $("play-opponent").value }));
+$("seat-leave").addEventListener("click", () => { leaveSeat(); setTitle("left the match"); });
+$("bindings-reset").addEventListener("click", () => { controls.resetBindings(); showBindings(); });
+
 // ------------------------------------------------------------------------------------------- replays
 function openReplay(message) {
   setRoster(message.roster);
@@ -110,6 +231,13 @@ function openReplay(message) {
   setTitle(`replay ${message.id} · ${message.frames.length} states`);
   const seek = $("seek");
   seek.min = timeline.firstTick; seek.max = timeline.lastTick; seek.value = timeline.firstTick;
+  const span = Math.max(1, timeline.lastTick - timeline.firstTick);
+  $("goal-marks").replaceChildren(...timeline.events.filter((e) => e.kind === "goal").map((e) => {
+    const mark = document.createElement("span");
+    mark.className = e.team; mark.title = describe(e)[0];
+    mark.style.left = `${(100 * (e.tick - timeline.firstTick)) / span}%`;
+    return mark;
+  }));
   $("timeline").hidden = false;
   $("speed").value = "1";
   timeline.speed = 1;
@@ -131,6 +259,8 @@ function togglePlay() {
 function setRoster(r) {
   roster = r;
   view.setRoster(r);
+  const mine = seat ? r.agents.indexOf(seat.slot) : -1;
+  if (mine >= 0 && !(view.cameraMode === "chase" && view.chaseIndex === mine)) view.setCamera("chase", mine);
   for (const team of [0, 1]) {
     const panel = $(team === 0 ? "boost-blue" : "boost-orange");
     panel.replaceChildren(...r.agents.map((agent, i) => {
@@ -139,12 +269,20 @@ function setRoster(r) {
       div.className = "car-boost"; div.dataset.index = i;
       div.innerHTML = `<span class="name"></span> <b class="amount"></b><div class="bar"><div class="fill"></div></div>`;
       div.querySelector(".name").textContent = r.names[i] === agent ? agent : `${agent} · ${r.names[i]}`;
+      if (i === mine) div.classList.add("you");
       return div;
     }).filter(Boolean));
   }
   boostPanels = [...document.querySelectorAll(".car-boost")];
+  $("tags").replaceChildren(...r.agents.map((agent, i) => {
+    const tag = document.createElement("div");
+    tag.className = `t${r.teams[i]}${i === mine ? " you" : ""}`;
+    tag.textContent = i === mine ? `${agent} (you)` : agent;
+    return tag;
+  }));
   written.clear();
-  const cams = [["broadcast", "Broadcast"], ["top", "Top-down"], ...r.agents.map((a, i) => [`chase:${i}`, `Chase ${a}`])];
+  const cams = [["broadcast", "Broadcast"], ["top", "Top-down"], ["orbit", "Orbit"],
+    ...r.agents.map((a, i) => [`chase:${i}`, `Chase ${a}`])];
   $("cameras").replaceChildren(...cams.map(([mode, label]) => {
     const b = document.createElement("button");
     b.textContent = label; b.dataset.mode = mode;
@@ -162,6 +300,7 @@ function setCamera(mode) {
 function markCamera() {
   const current = view.cameraMode === "chase" ? `chase:${view.chaseIndex}` : view.cameraMode;
   for (const b of $("cameras").children) b.classList.toggle("active", b.dataset.mode === current);
+  $("ball-cam").textContent = seat && view.cameraMode === "chase" ? (view.ballCam ? "ball cam" : "car cam") : "";
 }
 
 function setTitle(text) {
@@ -222,7 +361,7 @@ function updateHud(s) {
     $("feed").replaceChildren(...events.map((e) => {
       const [text, cls] = describe(e);
       const li = document.createElement("li");
-      li.textContent = `${clock(e.tick / (s.r || 120), true).replace("+", "")}  ${text}`;
+      li.textContent = `${e.clock === undefined ? "" : clock(e.clock, e.overtime)}  ${text}`;
       if (cls) li.className = cls;
       return li;
     }));
@@ -236,11 +375,85 @@ function updateHud(s) {
   }
 }
 
+// Each car's name over it, where it is drawn (hidden for a car not drawn or behind the camera).
+const TAG_ABOVE_UU = 110;
+function updateTags(s) {
+  const tags = $("tags").children;
+  for (let i = 0; i < tags.length; i++) {
+    const car = s ? s.a[i] : null;
+    const at = car && !(car[8] & FLAG_DEMOED) && !hudHidden ? view.screenPoint([car[0], car[1], car[2] + TAG_ABOVE_UU]) : null;
+    tags[i].style.display = at ? "" : "none";
+    if (at) tags[i].style.transform = `translate(${Math.round(at[0])}px, ${Math.round(at[1])}px) translate(-50%, -100%)`;
+  }
+}
+
+// The tick the kickoff countdown now showing began at: the first of the run of frames with the cars held.
+function kickoffStartTick() {
+  const frames = timeline.frames;
+  let i = timeline.index();
+  while (i > 0 && frames[i - 1].k) i--;
+  return frames.length ? frames[i].t : 0;
+}
+
+// A goal's banner for 3 s of game time after it; KICKOFF and the seconds left while the countdown holds the cars.
+const BANNER_S = 3;
+function updateBanner(s) {
+  let text = null, cls = "", sub = "";
+  const goal = s ? timeline.shownEvents(8).filter((e) => e.kind === "goal").pop() : null;
+  if (goal && timeline.playhead - goal.tick < BANNER_S * (s.r || 120)) {
+    text = `GOAL ${goal.team.toUpperCase()}`; cls = goal.team; sub = describe(goal)[0].replace(/^GOAL \w+: /, "");
+  } else if (s && s.k) {
+    text = "KICKOFF";
+    if (roster && roster.countdown_s) {
+      const left = roster.countdown_s - (s.t - kickoffStartTick()) / (s.r || 120);
+      if (left > 0) text = `KICKOFF ${Math.ceil(left)}`;
+    }
+  }
+  write($("banner"), "banner", `${text}|${cls}|${sub}`, () => {
+    $("banner").hidden = !text;
+    $("banner").className = cls;
+    $("banner").textContent = text || "";
+    if (sub) { const small = document.createElement("small"); small.textContent = sub; $("banner").append(small); }
+  });
+}
+
+// The end of a match: each car's line of the summary the server sends (goals, shots, saves, touches, team play).
+const STAT_COLUMNS = [["goals", "G"], ["shots", "Sh"], ["saves", "Sv"], ["assists", "A"], ["passes", "Pass"],
+  ["demos", "Demo"], ["touches", "Touch"], ["boost_collected", "Boost"]];
+function showFinalStats(summary) {
+  const box = $("final-stats");
+  if (!summary || !summary.stats || !roster) { box.hidden = true; return; }
+  const head = document.createElement("tr");
+  head.append(...["", ...STAT_COLUMNS.map(([, label]) => label)].map((t) => { const th = document.createElement("th"); th.textContent = t; return th; }));
+  const rows = roster.agents.filter((a) => summary.stats[a]).map((agent) => {
+    const tr = document.createElement("tr");
+    tr.className = `t${roster.teams[roster.agents.indexOf(agent)]}`;
+    const name = roster.names[roster.agents.indexOf(agent)];
+    tr.append(...[name === agent ? agent : `${agent} · ${name}`, ...STAT_COLUMNS.map(([k]) => {
+      const v = summary.stats[agent][k];
+      return v === undefined ? "–" : typeof v === "number" && !Number.isInteger(v) ? v.toFixed(0) : String(v);
+    })].map((t) => { const td = document.createElement("td"); td.textContent = t; return td; }));
+    return tr;
+  });
+  const title = document.createElement("h3");
+  const score = summary.score ? `${summary.score.blue ?? summary.score[0]} – ${summary.score.orange ?? summary.score[1]}` : "";
+  title.textContent = `${summary.winner ? `${summary.winner} wins` : "draw"} ${score}`;
+  const table = document.createElement("table");
+  table.append(head, ...rows);
+  const close = document.createElement("button");
+  close.textContent = "close"; close.addEventListener("click", () => { box.hidden = true; });
+  box.replaceChildren(title, table, close);
+  box.hidden = false;
+}
+
 // ------------------------------------------------------------------------------------------- keys
 window.addEventListener("keydown", (e) => {
   if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+  if (rebinding) { controls.bind(rebinding, e.code); rebinding = null; showBindings(); e.preventDefault(); return; }
+  if (seat && controls.keyDown(e.code)) { e.preventDefault(); sendControls(); return; }
   if (e.key === "1") setCamera("broadcast");
   else if (e.key === "2") setCamera("top");
+  else if (e.key === "4") setCamera("orbit");
   else if (e.key === "3" && roster && roster.agents.length) {
     setCamera(`chase:${view.cameraMode === "chase" ? (view.chaseIndex + 1) % roster.agents.length : view.chaseIndex}`);
   } else if (e.key === " ") { togglePlay(); e.preventDefault(); }
@@ -248,6 +461,26 @@ window.addEventListener("keydown", (e) => {
   else if (e.key === "ArrowLeft") timeline.step(-1);
   else if (e.key === "h") { hudHidden = !hudHidden; $("hud").classList.toggle("hidden", hudHidden); }
 });
+
+// The orbit camera: drag on the view to turn it round the ball (a drag in another camera switches to it),
+// the wheel to zoom.
+let dragFrom = null;
+$("view").addEventListener("pointerdown", (e) => { dragFrom = [e.clientX, e.clientY]; $("view").setPointerCapture(e.pointerId); });
+$("view").addEventListener("pointerup", () => { dragFrom = null; });
+$("view").addEventListener("pointermove", (e) => {
+  if (!dragFrom) return;
+  if (view.cameraMode !== "orbit") setCamera("orbit");
+  view.turnOrbit(e.clientX - dragFrom[0], e.clientY - dragFrom[1]);
+  dragFrom = [e.clientX, e.clientY];
+});
+$("view").addEventListener("wheel", (e) => {
+  if (view.cameraMode !== "orbit") return;
+  view.zoomOrbit(Math.sign(e.deltaY));
+  e.preventDefault();
+}, { passive: false });
+
+window.addEventListener("keyup", (e) => { controls.keyUp(e.code); if (seat) sendControls(); });
+window.addEventListener("blur", () => { controls.releaseAll(); if (seat) sendControls(); });
 
 setInterval(() => send({ op: "list" }), 3000);
 window.addEventListener("hashchange", () => {
@@ -262,11 +495,14 @@ function loop() {
   const dt = Math.min(now - last, 0.25);
   const started = performance.now();
   last = now;
+  sendControls(); // gamepads have no events: read every frame
   timeline.advance(dt, now);
   shown = timeline.current();
   if (shown) view.setObstacles(shown.x);
   view.draw(shown, now, dt, shown ? timeline.trail(TRAIL_POINTS, 0.6) : []);
   updateHud(shown);
+  updateTags(shown);
+  updateBanner(shown);
   stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
   stats.renders.push(now);
   while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
@@ -286,11 +522,18 @@ window.__view = {
   carPositions: () => (shown ? shown.a.map((c) => (c && !(c[8] & FLAG_DEMOED) ? c.slice(0, 3) : null)) : null),
   project: (point) => view.project(point),
   camera: () => view.cameraMode,
+  cameraPosition: () => view.camera.position.toArray(),
   score: () => (shown ? [...shown.s] : null),
   hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],
+  banner: () => ($("banner").hidden ? null : $("banner").textContent),
   tick: () => timeline.playhead,
   frameIndex: () => timeline.index(),
   mode: () => (source ? source.kind : null),
+  // each car as drawn: [x, y, z, qx, qy, qz, qw, boost, flags], null for a car not in the game
+  carStates: () => (shown ? shown.a.map((c) => (c ? [...c] : null)) : null),
+  seat: () => (seat ? { ...seat } : null),
+  inputsSent: () => inputSeq,
+  ballCam: () => view.ballCam,
   roster: () => roster,
   stats: () => ({ fps: rate(stats.renders), statesPerS: rate(stats.arrivals), frames: stats.frames,
     bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs }),

@@ -5,12 +5,23 @@ import { FLAG_BOOSTING, FLAG_DEMOED, FLAG_SUPERSONIC } from "./timeline.js";
 
 THREE.Object3D.DEFAULT_UP.set(0, 0, 1);
 
+// The game's world is left-handed (a car's "right" axis is its forward turned +90 degrees about up); three.js
+// draws right-handed. The scene is the game mirrored in x, so it looks as in the game and a car steering
+// right turns right on screen. Game points and rotations go through these two on their way in.
+export function toScene(x, y, z) { return [-x, y, z]; }
+// The quaternion (x, y, z, w) of rotation R drawn mirrored: M R D with M = diag(-1, 1, 1), D = diag(1, -1, 1)
+// (a proper rotation taking the model's forward and up to the mirrored forward and up).
+function toSceneQuaternion(x, y, z, w) { return [-y, -x, w, z]; }
+
 export const TEAM_COLORS = [0x2f7bff, 0xff8a1c];
 export const TRAIL_POINTS = 24;
+// how far off the view's axis the chased car may be, as a fraction of half the vertical field of view
+const CHASE_MAX_OFF_AXIS = 0.7;
 
 function arenaMeshes(arena) {
   // Colour the physics' triangles by where they are: floor, goal boxes (by team) and the rest of the shell.
-  const v = arena.vertices, tris = arena.triangles, backY = arena.field.extent_y;
+  const v = arena.vertices.map((value, i) => (i % 3 === 0 ? -value : value)), backY = arena.field.extent_y;
+  const tris = arena.triangles.map((id, i, all) => (i % 3 === 1 ? all[i + 1] : i % 3 === 2 ? all[i - 1] : id));
   const groups = { floor: [], shell: [], goal0: [], goal1: [] };
   for (let i = 0; i < tris.length; i += 3) {
     const ids = [tris[i], tris[i + 1], tris[i + 2]];
@@ -64,13 +75,13 @@ function makePads(arena) {
     const pad = new THREE.Mesh(new THREE.CylinderGeometry(r, r, 10, big ? 24 : 12),
       new THREE.MeshBasicMaterial({ color: 0xffc93c }));
     pad.rotation.x = Math.PI / 2;
-    pad.position.set(x, y, 6);
+    pad.position.set(...toScene(x, y, 6));
     group.add(pad);
     let orb = null;
     if (big) {
       orb = new THREE.Mesh(new THREE.SphereGeometry(60, 16, 12),
         new THREE.MeshBasicMaterial({ color: 0xffb020, transparent: true, opacity: 0.75 }));
-      orb.position.set(x, y, 120);
+      orb.position.set(...toScene(x, y, 120));
       group.add(orb);
     }
     pads.push({ pad, orb, lit: true });
@@ -94,6 +105,14 @@ function makeCar(hitbox, team) {
     new THREE.MeshLambertMaterial({ color: 0x1b2330 }));
   cabin.position.set(-l * 0.1, 0, h * 0.3);
   body.add(cabin);
+  // what shows the heading at a glance: a white stripe from the cabin to a white nose
+  const white = new THREE.MeshBasicMaterial({ color: 0xf4f7fb });
+  const stripe = new THREE.Mesh(new THREE.BoxGeometry(l * 0.5, w * 0.18, h * 0.04), white);
+  stripe.position.set(l * 0.24, 0, h * 0.17);
+  body.add(stripe);
+  const nose = new THREE.Mesh(new THREE.BoxGeometry(l * 0.06, w * 0.9, h * 0.3), white);
+  nose.position.set(l * 0.49, 0, -h * 0.12);
+  body.add(nose);
   const spoiler = new THREE.Mesh(new THREE.BoxGeometry(l * 0.08, w, h * 0.12), paint);
   spoiler.position.set(-l * 0.47, 0, h * 0.32);
   body.add(spoiler);
@@ -130,6 +149,9 @@ export class View {
     this.camera = new THREE.PerspectiveCamera(55, 1, 20, 40000);
     this.cameraMode = "broadcast";
     this.chaseIndex = 0;
+    this.ballCam = true;
+    // the orbit camera: around the ball, turned and zoomed with the mouse (radians, uu)
+    this.orbit = { yaw: 0.6, pitch: 0.45, distance: 3200 };
     this.cars = [];
     this.roster = null;
     this.camTarget = new THREE.Vector3();
@@ -173,6 +195,14 @@ export class View {
     this.chaseIndex = Math.min(this.chaseIndex, Math.max(0, this.cars.length - 1));
   }
 
+  // Turn the orbit camera by a mouse drag (CSS pixels) or zoom it by a wheel step.
+  turnOrbit(dx, dy) {
+    this.orbit.yaw -= dx * 0.006;
+    this.orbit.pitch = THREE.MathUtils.clamp(this.orbit.pitch + dy * 0.006, 0.05, 1.5);
+  }
+
+  zoomOrbit(steps) { this.orbit.distance = THREE.MathUtils.clamp(this.orbit.distance * 1.1 ** steps, 600, 12000); }
+
   setCamera(mode, index) {
     this.cameraMode = mode;
     if (index !== undefined) this.chaseIndex = index;
@@ -198,14 +228,14 @@ export class View {
   }
 
   apply(s, now, trailPoints) {
-    const [bx, by, bz] = s.b;
+    const [bx, by, bz] = toScene(...s.b);
     this.ball.position.set(bx, by, bz);
     this.ballShadow.position.set(bx, by, 3);
     this.ballShadow.material.opacity = Math.max(0.08, 0.4 - bz / 5000);
     const pos = this.trailLine.geometry.attributes.position, col = this.trailLine.geometry.attributes.color;
     const trail = trailPoints || [];
     for (let i = 0; i < TRAIL_POINTS; i++) {
-      const p = trail[Math.min(i, trail.length - 1)] || [bx, by, bz]; // newest first
+      const p = trail.length ? toScene(...trail[Math.min(i, trail.length - 1)]) : [bx, by, bz]; // newest first
       const k = 1 - Math.min(i, trail.length - 1) / TRAIL_POINTS;
       pos.setXYZ(i, p[0], p[1], p[2]);
       col.setXYZ(i, 0.05 + 0.9 * k, 0.05 + 0.85 * k, 0.08 + 0.6 * k);
@@ -238,8 +268,8 @@ export class View {
       c.demoedAt = null;
       c.wreck.visible = false;
       c.car.visible = true;
-      c.car.position.set(car[0], car[1], car[2]);
-      c.car.quaternion.set(car[3], car[4], car[5], car[6]);
+      c.car.position.set(...toScene(car[0], car[1], car[2]));
+      c.car.quaternion.set(...toSceneQuaternion(car[3], car[4], car[5], car[6]));
       const boosting = (car[8] & FLAG_BOOSTING) !== 0;
       c.flame.visible = boosting;
       if (boosting) {
@@ -250,9 +280,15 @@ export class View {
     });
   }
 
-  // Where a point (uu) is on the canvas, in CSS pixels from its top left.
+  // Where a game point (uu) is drawn, in CSS pixels from the canvas' top left; null when behind the camera.
+  screenPoint(point) {
+    const v = new THREE.Vector3(...toScene(...point)).project(this.camera);
+    return v.z > 1 ? null : [((v.x + 1) / 2) * this.canvas.clientWidth, ((1 - v.y) / 2) * this.canvas.clientHeight];
+  }
+
+  // Where a game point (uu) is on the canvas, in CSS pixels from its top left.
   project([x, y, z]) {
-    const v = new THREE.Vector3(x, y, z).project(this.camera);
+    const v = new THREE.Vector3(...toScene(x, y, z)).project(this.camera);
     return [((v.x + 1) / 2) * this.canvas.clientWidth, ((1 - v.y) / 2) * this.canvas.clientHeight];
   }
 
@@ -264,7 +300,7 @@ export class View {
     for (const [cx, cy, cz, hx, hy, hz] of list || []) {
       const box = new THREE.Mesh(new THREE.BoxGeometry(2 * hx, 2 * hy, 2 * hz),
         new THREE.MeshLambertMaterial({ color: 0x9aa4b2, transparent: true, opacity: 0.6 }));
-      box.position.set(cx, cy, cz);
+      box.position.set(...toScene(cx, cy, cz));
       this.obstacles.add(box);
     }
   }
@@ -274,7 +310,12 @@ export class View {
     const follow = 1 - Math.exp(-dt * 4);
     let pos, target, up = new THREE.Vector3(0, 0, 1);
     const chased = this.cameraMode === "chase" && this.cars[this.chaseIndex];
-    if (this.cameraMode === "top") {
+    if (this.cameraMode === "orbit") {
+      const { yaw, pitch, distance } = this.orbit;
+      target = new THREE.Vector3().copy(ball);
+      pos = new THREE.Vector3(ball.x + distance * Math.cos(pitch) * Math.cos(yaw),
+        ball.y + distance * Math.cos(pitch) * Math.sin(yaw), Math.max(40, ball.z + distance * Math.sin(pitch)));
+    } else if (this.cameraMode === "top") {
       // high enough to fit the field and both goals, the field's length across the screen
       const halfLength = this.arena ? this.arena.field.extent_y + this.arena.goal.depth : 6000;
       const halfWidth = this.arena ? this.arena.field.extent_x + 200 : 4300;
@@ -284,7 +325,10 @@ export class View {
       up = new THREE.Vector3(-1, 0, 0); // the field's length across the screen, blue's goal on the left
     } else if (chased && chased.car.visible) {
       const car = chased.car.position;
-      const away = new THREE.Vector3(car.x - ball.x, car.y - ball.y, 0);
+      // ball cam: behind the car on the line from the ball; car cam: behind the car's heading
+      const heading = new THREE.Vector3(1, 0, 0).applyQuaternion(chased.car.quaternion);
+      const away = this.ballCam ? new THREE.Vector3(car.x - ball.x, car.y - ball.y, 0)
+        : new THREE.Vector3(-heading.x, -heading.y, 0);
       if (away.lengthSq() < 1) away.set(-1, 0, 0);
       away.normalize();
       pos = new THREE.Vector3(car.x + away.x * 750, car.y + away.y * 750, car.z + 320);
@@ -293,7 +337,8 @@ export class View {
         pos.set(THREE.MathUtils.clamp(pos.x, 150 - f.extent_x, f.extent_x - 150),
           THREE.MathUtils.clamp(pos.y, 150 - f.extent_y, f.extent_y - 150), THREE.MathUtils.clamp(pos.z, 60, f.height - 100));
       }
-      target = new THREE.Vector3().copy(ball).lerp(car, 0.25);
+      target = this.ballCam ? new THREE.Vector3().copy(ball).lerp(car, 0.25)
+        : new THREE.Vector3().copy(car).addScaledVector(away, -1500);
     } else {
       // beside the field (+x, so blue's goal is on the left), level with the ball along its length
       pos = new THREE.Vector3(ball.x * 0.35 + 5600, ball.y * 0.8, 2600 + ball.z * 0.3);
@@ -303,8 +348,25 @@ export class View {
     this._lastMode = this.cameraMode;
     this.camPos.lerp(pos, snap ? 1 : follow);
     this.camTarget.lerp(target, snap ? 1 : follow);
+    if (chased && chased.car.visible) this.keepInView(chased.car.position);
     cam.position.copy(this.camPos);
     cam.up.copy(up);
     cam.lookAt(this.camTarget);
+  }
+
+  // Turn the camera's aim towards `point` until it is within CHASE_MAX_OFF_AXIS of the vertical field of view
+  // from the centre: a ball high above would otherwise take the chased car off the bottom of the screen.
+  keepInView(point) {
+    const toPoint = new THREE.Vector3().subVectors(point, this.camPos);
+    const aim = new THREE.Vector3().subVectors(this.camTarget, this.camPos);
+    if (toPoint.lengthSq() < 1 || aim.lengthSq() < 1) return;
+    const distance = aim.length();
+    toPoint.normalize(); aim.normalize();
+    const limit = CHASE_MAX_OFF_AXIS * THREE.MathUtils.degToRad(this.camera.fov / 2);
+    const angle = toPoint.angleTo(aim);
+    if (angle <= limit) return;
+    const turn = new THREE.Quaternion().setFromUnitVectors(toPoint, aim);
+    const partial = new THREE.Quaternion().slerp(turn, limit / angle);
+    this.camTarget.copy(this.camPos).addScaledVector(toPoint.applyQuaternion(partial), distance);
   }
 }

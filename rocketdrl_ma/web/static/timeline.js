@@ -25,6 +25,9 @@ function slerp(qa, qb, t) {
   return [x / n, y / n, z / n, w / n];
 }
 
+// An event with the match clock of the frame that brought it (the scoreboard's time, not the physics' tick).
+function onClock(event, frame) { return { ...event, clock: frame.c, overtime: frame.o }; }
+
 function far(a, b) { return Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]) > TELEPORT_UU; }
 
 // The frames around `tick` and how far between them it is: [a, b, t], or null with no frames.
@@ -80,7 +83,8 @@ export class Timeline {
   }
 
   // ------------------------------------------------------------------ live
-  startLive() { this.reset(); this.live = true; this.playing = true; }
+  // `asPlayer`: the page plays in this match (a shorter live lag)
+  startLive(asPlayer = false) { this.reset(); this.live = true; this.playing = true; this.asPlayer = asPlayer; }
 
   pushLive(frame, now) {
     const last = this.frames[this.frames.length - 1];
@@ -90,7 +94,7 @@ export class Timeline {
     if (last && frame.t === last.t) { this.frames[this.frames.length - 1] = frame; }
     else this.frames.push(frame);
     this.tickRate = frame.r || this.tickRate;
-    for (const e of frame.e || []) this.events.push(e);
+    for (const e of frame.e || []) this.events.push(onClock(e, frame));
     if (last && frame.t > last.t && this.lastArrival) {
       const gap = Math.max(now - this.lastArrival, 1e-3);
       const rate = (frame.t - last.t) / gap;
@@ -104,14 +108,21 @@ export class Timeline {
     while (this.events.length > 50) this.events.shift();
   }
 
-  addEvents(events) { for (const e of events || []) this.events.push(e); }
+  // Live: how far behind the newest state the playhead aims to be, in seconds. A player sees their car one
+  // state's interval behind (sooner, at the cost of a stutter when a state comes late); a spectator LIVE_LAG_S.
+  lagS() { return this.asPlayer ? Math.min(LIVE_LAG_S, 1.1 * this.arrivalGap) : LIVE_LAG_S; }
+
+  addEvents(events) {
+    const last = this.frames[this.frames.length - 1];
+    for (const e of events || []) this.events.push(last ? onClock(e, last) : e);
+  }
 
   // ------------------------------------------------------------------ replay
   loadReplay(frames, tickRate) {
     this.reset();
     this.frames = frames;
     this.tickRate = tickRate || 120;
-    this.events = frames.flatMap((f) => f.e || []);
+    this.events = frames.flatMap((f) => (f.e || []).map((e) => onClock(e, f)));
     this.playhead = frames.length ? frames[0].t : 0;
     this.playing = true;
   }
@@ -142,7 +153,7 @@ export class Timeline {
     if (this.live) {
       const rate = this.ticksPerS || this.tickRate;
       const quiet = now - this.lastArrival > 2.5 * this.arrivalGap + 0.05; // nothing new: show the newest
-      const target = quiet ? this.lastTick : this.lastTick - LIVE_LAG_S * rate;
+      const target = quiet ? this.lastTick : this.lastTick - this.lagS() * rate;
       const error = target - this.playhead;
       if (Math.abs(error) > rate * 1.0) this.playhead = target; // far behind or ahead: jump
       else this.playhead += dt * rate * Math.min(2, Math.max(0.25, 1 + error / (rate * 0.25)));
