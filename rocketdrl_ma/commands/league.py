@@ -13,17 +13,22 @@ def _run_league(args: argparse.Namespace) -> int:
     from rocketdrl_ma.league.runner import run_league
     from rocketdrl_ma.league.schedule import schedule
 
+    from rocketdrl_ma.league.batch_play import DEFAULT_AT_ONCE
+
     overrides = {"results": args.results} if args.results else {}
     cfg = load_league_config(args.config, overrides)
+    if args.at_once is None:
+        args.at_once = DEFAULT_AT_ONCE
     if args.verify:
-        return _verify(cfg, args.verify, args.workers)
+        return _verify(cfg, args.verify, args.workers, args.at_once)
     planned = schedule(cfg)
     if not args.report_only:
         def show(match, result) -> None:
             print(f"[{match.index + 1}/{len(planned)}] {match.key}: {match.blue} {result.score_blue} - "
                   f"{result.score_orange} {match.orange} (seed {match.seed}, {result.duration_s:.0f} s)", flush=True)
 
-        run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray)
+        run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray,
+                         at_once=args.at_once)
         print(f"league {cfg.name}: {run.scheduled} scheduled, {run.already_stored} already stored, "
               f"{run.played} played now", flush=True)
     with ResultsStore(cfg.results) as store:
@@ -39,10 +44,10 @@ def _run_league(args: argparse.Namespace) -> int:
     return 0
 
 
-def _verify(cfg, path: str, workers: int) -> int:
+def _verify(cfg, path: str, workers: int, at_once: int) -> int:
     from rocketdrl_ma.league.replay_check import read_records, verify_records
 
-    differences = verify_records(cfg, path, workers)
+    differences = verify_records(cfg, path, workers, at_once)
     for line in differences:
         print(f"DIFFERS {line}")
     matches, _ = read_records(path)
@@ -78,8 +83,11 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-matches", type=int, default=None, help="play at most this many missing matches")
     p.add_argument("--report-only", action="store_true", help="rate the stored matches, play none")
     p.add_argument("--workers", type=int, default=0,
-                   help="play this many local matches at once, each in its own process (default 0: one at a "
-                        "time in this process); results and ratings are the same either way")
+                   help="share the local matches among this many processes (default 0: all in this process); "
+                        "results and ratings are the same either way")
+    p.add_argument("--at-once", type=int, default=None, metavar="N",
+                   help="local matches each process plays at once, every checkpoint's cars of all of them in one "
+                        "forward (default 8; 1: one match at a time); results and ratings are the same either way")
     p.add_argument("--ray", default=None, metavar="auto|HOST:PORT",
                    help="play local matches as tasks on a Ray cluster (`pip install rocketdrl-ma[cluster]`)")
     p.add_argument("--record", default=None, metavar="FILE",
