@@ -26,6 +26,8 @@ def play_local_at_once(cfg: LeagueConfig, matches: Iterable[ScheduledMatch],
                        at_once: int = DEFAULT_AT_ONCE) -> Iterator[tuple[ScheduledMatch, MatchResult]]:
     """Every match of ``matches`` (taken from it only when a place is free), ``at_once`` at a time in this process;
     each result as soon as its match ends."""
+    import torch
+
     from rocketdrl_ma.policies.ppo.batched import cars_controls, seat_factory
 
     if isinstance(at_once, bool) or not isinstance(at_once, int) or at_once < 1:
@@ -42,6 +44,9 @@ def play_local_at_once(cfg: LeagueConfig, matches: Iterable[ScheduledMatch],
 
     pending = iter(matches)
     live: list[LocalMatch] = []
+    threads = torch.get_num_threads()
+    # a forward of a few dozen rows gains nothing from more threads, and on a busy machine they wait on each other
+    torch.set_num_threads(1)
     try:
         while True:
             while len(live) < at_once and (match := next(pending, None)) is not None:
@@ -62,5 +67,6 @@ def play_local_at_once(cfg: LeagueConfig, matches: Iterable[ScheduledMatch],
                     game.close()
                 yield game.match, result
     finally:
+        torch.set_num_threads(threads)
         for game in live:
             game.close()
