@@ -63,8 +63,11 @@ class LocalMatch:
 
     def step(self, controls: list[CarControls]) -> None:
         """One decision with ``controls`` of the cars ``cars()`` named, in its order."""
-        encode = self.env.action_parser.encode
-        _, _, _, _, infos = self.env.step({agent: encode(c) for agent, c in zip(self.env.agents, controls)})
+        env = self.env
+        actions = {agent: env.action_parser.encode(c) for agent, c in zip(env.agents, controls)}
+        # ``env.step`` without the env's own observations: every policy builds its own from the state
+        env.rules.advance(env.decision_controls(actions), env.tick_skip)
+        _, _, _, _, infos = env.end_decision(observe=False)
         self.summary = next(iter(infos.values())).get("summary", self.summary)
         self.events += self.env.game_state.events
 
