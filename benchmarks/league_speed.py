@@ -4,8 +4,9 @@
 Both sides play the first ``--matches`` matches of ``--league`` (default: the 2v2 self-play checkpoint against two
 rotators, full 5-minute matches) with ``--workers`` processes, into fresh results stores, each after a short
 warm-up match in its own tree (so that neither side's time holds numba compiling its kernels). Printed: each side's
-seconds and matches per minute, the ratio after / before, whether every match's score is the same on both sides,
-and the load average at the start and the end (the figures move with whatever else runs on the machine).
+seconds and matches per minute, its CPU seconds (all its processes) and matches per CPU minute, the ratios after /
+before, whether every match's score is the same on both sides, and the load average. Wall time moves with whatever
+else runs on the machine (a run at load > 1.5 on 2 cores does not count); CPU time moves much less.
 
 Run from the repo root: ``nice -n 5 .venv/bin/python benchmarks/league_speed.py [--matches 4] [--workers 2]
 [--at-once N] [--baseline REF] [--clock-s SECONDS]``
@@ -26,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # One side's run, in its own process with its tree first on the path: a warm-up match, then the timed league.
 CELL = r"""
-import json, sys, time
+import json, resource, sys, time
 import yaml
 from rocketdrl_ma.league.config import load_league_config, validate_league_config
 from rocketdrl_ma.league.play import play_local
@@ -40,12 +41,15 @@ warm = validate_league_config({**raw, "overrides": {**raw.get("overrides", {}), 
 play_local(warm, schedule(warm)[0])
 cfg = load_league_config(path)
 options = {} if at_once == "-" else {"at_once": int(at_once)}
-start = time.perf_counter()
+def cpu_s():
+    return sum(r.ru_utime + r.ru_stime for r in (resource.getrusage(resource.RUSAGE_SELF),
+                                               resource.getrusage(resource.RUSAGE_CHILDREN)))
+start, start_cpu = time.perf_counter(), cpu_s()
 run = run_league(cfg, max_matches=matches, workers=workers, **options)
-seconds = time.perf_counter() - start
+seconds, cpu = time.perf_counter() - start, cpu_s() - start_cpu
 with ResultsStore(cfg.results) as store:
     scores = {r.match_key: [r.score_blue, r.score_orange] for r in store.results(source="league")}
-print(json.dumps({"seconds": seconds, "played": run.played, "scores": scores}))
+print(json.dumps({"seconds": seconds, "cpu_s": cpu, "played": run.played, "scores": scores}))
 """
 
 
@@ -97,12 +101,15 @@ def main() -> None:
             at_once = "-" if name == "before" or args.at_once is None else str(args.at_once)
             runs[name] = side(tree, league, args.matches, args.workers, at_once)
             r = runs[name]
-            print(f"{name}: {r['played']} matches in {r['seconds']:.1f} s, "
-                  f"{60.0 * r['played'] / r['seconds']:.2f} matches/min", flush=True)
+            print(f"{name}: {r['played']} matches in {r['seconds']:.1f} s, {60.0 * r['played'] / r['seconds']:.2f} "
+                  f"matches/min; {r['cpu_s']:.1f} CPU s, {60.0 * r['played'] / r['cpu_s']:.2f} matches per CPU minute "
+                  f"(load average {os.getloadavg()[0]:.2f})", flush=True)
     before, after = runs["before"], runs["after"]
     ratio = (after["played"] / after["seconds"]) / (before["played"] / before["seconds"])
+    cpu_ratio = (after["played"] / after["cpu_s"]) / (before["played"] / before["cpu_s"])
     same = before["scores"] == after["scores"]
-    print(f"after / before: {ratio:.2f} x; scores {'identical' if same else 'DIFFER'}: {after['scores']}")
+    print(f"after / before: {ratio:.2f} x matches/min, {cpu_ratio:.2f} x matches per CPU minute; "
+          f"scores {'identical' if same else 'DIFFER'}: {after['scores']}")
     print(f"load average {os.getloadavg()[0]:.2f} at the end")
 
 
