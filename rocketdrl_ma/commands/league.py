@@ -7,13 +7,12 @@ import argparse
 def _run_league(args: argparse.Namespace) -> int:
     from rocketdrl_ma.results import ResultsStore
 
+    from rocketdrl_ma.league.batch_play import DEFAULT_AT_ONCE
     from rocketdrl_ma.league.config import load_league_config
     from rocketdrl_ma.league.ratings import rate
     from rocketdrl_ma.league.report import write_report
     from rocketdrl_ma.league.runner import run_league
     from rocketdrl_ma.league.schedule import schedule
-
-    from rocketdrl_ma.league.batch_play import DEFAULT_AT_ONCE
 
     overrides = {"results": args.results} if args.results else {}
     cfg = load_league_config(args.config, overrides)
