@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import torch
 
+import rocketdrl_ma
 from rocketdrl_ma.league.batch_play import play_local_at_once
 from rocketdrl_ma.league.config import validate_league_config
 from rocketdrl_ma.league.play import play_local
@@ -59,7 +60,6 @@ def test_at_once_must_be_a_positive_int(tmp_path):
 def test_batched_greedy_actions_are_each_cars_own_on_real_observations():
     """Observations of a played 2v2 match through the shipped checkpoint: every batched action is the batch-1 one."""
     make = seat_factory("checkpoint:policies/checkpoints/selfplay_2v2_from_1v1.pt")
-    import rocketdrl_ma
     env = rocketdrl_ma.parallel_env("matches/2v2.yaml", kickoff_countdown_s=0.0)
     env.reset(seed=3)
     seats = {agent: make() for agent in env.agents}
