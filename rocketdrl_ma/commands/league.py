@@ -7,6 +7,7 @@ import argparse
 def _run_league(args: argparse.Namespace) -> int:
     from rocketdrl_ma.results import ResultsStore
 
+    from rocketdrl_ma.league.batch_play import DEFAULT_AT_ONCE
     from rocketdrl_ma.league.config import load_league_config
     from rocketdrl_ma.league.ratings import rate
     from rocketdrl_ma.league.report import write_report
@@ -15,8 +16,10 @@ def _run_league(args: argparse.Namespace) -> int:
 
     overrides = {"results": args.results} if args.results else {}
     cfg = load_league_config(args.config, overrides)
+    if args.at_once is None:
+        args.at_once = DEFAULT_AT_ONCE
     if args.verify:
-        return _verify(cfg, args.verify, args.workers)
+        return _verify(cfg, args.verify, args.workers, args.at_once)
     planned = schedule(cfg)
     if not args.report_only:
         def show(match, result) -> None:
@@ -28,7 +31,7 @@ def _run_league(args: argparse.Namespace) -> int:
             from rocketdrl_ma.server.settings import ClientSettings
             client = ClientSettings.load(args.client_config)
         run = run_league(cfg, max_matches=args.max_matches, on_result=show, workers=args.workers, ray=args.ray,
-                         client=client)
+                         at_once=args.at_once, client=client)
         print(f"league {cfg.name}: {run.scheduled} scheduled, {run.already_stored} already stored, "
               f"{run.played} played now", flush=True)
     with ResultsStore(cfg.results) as store:
@@ -44,10 +47,10 @@ def _run_league(args: argparse.Namespace) -> int:
     return 0
 
 
-def _verify(cfg, path: str, workers: int) -> int:
+def _verify(cfg, path: str, workers: int, at_once: int) -> int:
     from rocketdrl_ma.league.replay_check import read_records, verify_records
 
-    differences = verify_records(cfg, path, workers)
+    differences = verify_records(cfg, path, workers, at_once)
     for line in differences:
         print(f"DIFFERS {line}")
     matches, _ = read_records(path)
@@ -94,8 +97,11 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
                    help="remote entrants: a client YAML for the match server (an admin's, from `rocketdrl-ma keys`); "
                         "default: the password and key in the server's folder on this machine")
     p.add_argument("--workers", type=int, default=0,
-                   help="play this many local matches at once, each in its own process (default 0: one at a "
-                        "time in this process); results and ratings are the same either way")
+                   help="share the local matches among this many processes (default 0: all in this process); "
+                        "results and ratings are the same either way")
+    p.add_argument("--at-once", type=int, default=None, metavar="N",
+                   help="local matches each process plays at once, every checkpoint's cars of all of them in one "
+                        "forward (default 8; 1: one match at a time); results and ratings are the same either way")
     p.add_argument("--ray", default=None, metavar="auto|HOST:PORT",
                    help="play local matches as tasks on a Ray cluster (`pip install rocketdrl-ma[cluster]`)")
     p.add_argument("--record", default=None, metavar="FILE",

@@ -6,7 +6,10 @@ import secrets
 import threading
 import time
 
+from rocketdrl_ma.physics import CarControls
+from rocketdrl_ma.policies.base import Policy
 from rocketdrl_ma.results import MatchResult
+from rocketdrl_ma.rules.state import GameState
 
 from .config import LeagueConfig
 from .digest import match_digests
@@ -33,33 +36,64 @@ def _result(cfg: LeagueConfig, match: ScheduledMatch, score: dict, duration_s: f
                                                  **details})
 
 
+class LocalMatch:
+    """A scheduled match on a local env of its own, driven decision by decision from outside: ``cars()`` says who
+    must act, ``step`` takes their controls; ``result()`` once ``over``. ``policies``: one per car (its slot)."""
+
+    def __init__(self, cfg: LeagueConfig, match: ScheduledMatch, policies: dict[str, Policy]):
+        import rocketdrl_ma
+
+        self.cfg, self.match, self.policies = cfg, match, policies
+        self.env = rocketdrl_ma.parallel_env(cfg.match, **cfg.overrides)
+        self.env.reset(seed=match.seed)
+        self.state = self.env.rules.game_state()
+        for policy in policies.values():
+            policy.reset(self.state)
+        self.summary: dict = {}
+        self.events: list = []
+
+    @property
+    def over(self) -> bool:
+        return not self.env.agents
+
+    def cars(self) -> list[tuple[Policy, str, GameState]]:
+        """``(policy, agent, state)`` of every live car this decision."""
+        self.state = self.env.rules.game_state()
+        return [(self.policies[agent], agent, self.state) for agent in self.env.agents]
+
+    def step(self, controls: list[CarControls]) -> None:
+        """One decision with ``controls`` of the cars ``cars()`` named, in its order."""
+        env = self.env
+        actions = {agent: env.action_parser.encode(c) for agent, c in zip(env.agents, controls)}
+        # ``env.step`` without the env's own observations: every policy builds its own from the state
+        env.rules.advance(env.decision_controls(actions), env.tick_skip)
+        _, _, _, _, infos = env.end_decision(observe=False)
+        self.summary = next(iter(infos.values())).get("summary", self.summary)
+        self.events += self.env.game_state.events
+
+    def result(self) -> MatchResult:
+        state = self.env.rules.game_state()
+        return _result(self.cfg, self.match, self.summary["score"], state.tick / state.tick_rate,
+                       {"where": "local", "overtime": bool(self.summary.get("overtime", False)),
+                        "stats": self.summary.get("stats", {}), "team": self.summary.get("team", {}),
+                        **match_digests(self.env, self.events)})
+
+    def close(self) -> None:
+        self.env.close()
+
+
 def play_local(cfg: LeagueConfig, match: ScheduledMatch) -> MatchResult:
-    """A full match on a local env, every car driven by its player's policy (one instance per car)."""
-    import rocketdrl_ma
+    """A full match on a local env, every car driven by its player's policy (one instance per car, one
+    ``controls`` call per car and decision): the reference every batched way of playing it reproduces."""
     from rocketdrl_ma.policies.registry import load_policy
 
-    policies = {slot: load_policy(spec) for slot, (_, spec) in slot_players(cfg, match).items()}
-    env = rocketdrl_ma.parallel_env(cfg.match, **cfg.overrides)
+    game = LocalMatch(cfg, match, {slot: load_policy(spec) for slot, (_, spec) in slot_players(cfg, match).items()})
     try:
-        env.reset(seed=match.seed)
-        state = env.rules.game_state()
-        for policy in policies.values():
-            policy.reset(state)
-        summary: dict = {}
-        events: list = []
-        while env.agents:
-            state = env.rules.game_state()
-            actions = {a: env.action_parser.encode(policies[a].controls(a, state)) for a in env.agents}
-            _, _, _, _, infos = env.step(actions)
-            summary = next(iter(infos.values())).get("summary", summary)
-            events += env.game_state.events
-        state = env.rules.game_state()
-        return _result(cfg, match, summary["score"], state.tick / state.tick_rate,
-                       {"where": "local", "overtime": bool(summary.get("overtime", False)),
-                        "stats": summary.get("stats", {}), "team": summary.get("team", {}),
-                        **match_digests(env, events)})
+        while not game.over:
+            game.step([policy.controls(agent, state) for policy, agent, state in game.cars()])
+        return game.result()
     finally:
-        env.close()
+        game.close()
 
 
 def play_on_server(cfg: LeagueConfig, match: ScheduledMatch, session, client=None) -> MatchResult:

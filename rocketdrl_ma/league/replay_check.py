@@ -18,6 +18,7 @@ from rocketdrl_ma.config import resolve_shipped_path
 from rocketdrl_ma.results import MatchResult
 
 from .config import LeagueConfig
+from .batch_play import DEFAULT_AT_ONCE
 from .ratings import rate
 from .runner import play_local_matches
 from .schedule import ScheduledMatch, schedule
@@ -63,17 +64,19 @@ def read_records(path: str | Path) -> tuple[list[dict[str, Any]], dict[str, Any]
     return matches, ratings
 
 
-def verify_records(cfg: LeagueConfig, path: str | Path, workers: int = 0) -> list[str]:
-    """Play every match recorded at ``path`` again (``workers`` processes, as the league would) and compare every
-    field of its record, and the ratings line, exactly. Returns the differences, each naming the match and the
-    field; empty: a bit-identical replay."""
+def verify_records(cfg: LeagueConfig, path: str | Path, workers: int = 0,
+                   at_once: int = DEFAULT_AT_ONCE) -> list[str]:
+    """Play every match recorded at ``path`` again (``at_once`` at a time in ``workers`` processes, as the league
+    would) and compare every field of its record, and the ratings line, exactly. Returns the differences, each
+    naming the match and the field; empty: a bit-identical replay."""
     records, ratings = read_records(path)
     by_key = {m.key: m for m in schedule(cfg)}
     unknown = [r["key"] for r in records if r["key"] not in by_key]
     if unknown:
         return [f"{key}: not in the schedule of league {cfg.name!r}" for key in unknown]
     matches = [by_key[r["key"]] for r in records]
-    replayed = dict((match.key, result) for match, result in play_local_matches(cfg, matches, workers))
+    replayed = dict((match.key, result) for match, result in play_local_matches(cfg, matches, workers,
+                                                                                at_once=at_once))
     differences = []
     for record, match in zip(records, matches):
         again = match_record(match, replayed[match.key])

@@ -2,16 +2,18 @@
 
 Each finished match is appended (and committed) as soon as it is known, so killing the league at any moment
 loses at most the matches in progress, which the next run plays again from the start. Matches between local
-entrants can be played several at once (``workers`` processes on this machine, or tasks on a Ray cluster):
-each is a pure function of the config and its scheduled seed, so the stored results, and the ratings computed
-from them in schedule order, are those of a sequential run; this process stays the only writer of the store.
+entrants are played several at once in one process (``batch_play``: one forward per checkpoint for all its cars),
+in each of ``workers`` processes on this machine, or as tasks on a Ray cluster: each is a pure function of the
+config and its scheduled seed, so the stored results, and the ratings computed from them in schedule order, are
+those of a sequential run; this process stays the only writer of the store.
 Matches with a remote entrant are played on the match server, one at a time, from this process.
 """
 from __future__ import annotations
 
 import multiprocessing
+import queue
+import traceback
 from collections.abc import Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -19,6 +21,7 @@ from typing import Callable
 from rocketdrl_ma.results import MatchResult, ResultsStore
 
 from .config import LeagueConfig
+from .batch_play import DEFAULT_AT_ONCE, play_local_at_once
 from .play import play_local, play_on_server
 from .schedule import ScheduledMatch, schedule
 
@@ -35,24 +38,65 @@ def needs_server(cfg: LeagueConfig, match: ScheduledMatch) -> bool:
 
 
 def play_local_matches(cfg: LeagueConfig, matches: list[ScheduledMatch], workers: int = 0,
-                       ray: str | None = None) -> Iterator[tuple[ScheduledMatch, MatchResult]]:
-    """Every match of ``matches`` on local envs, each result as soon as it is known: in this process (``workers``
-    0, schedule order), in ``workers`` processes, or as tasks on the Ray cluster at ``ray`` (``auto``: the one
-    this machine belongs to)."""
+                       ray: str | None = None,
+                       at_once: int = DEFAULT_AT_ONCE) -> Iterator[tuple[ScheduledMatch, MatchResult]]:
+    """Every match of ``matches`` on local envs, each result as soon as it is known: ``at_once`` matches at a time
+    in this process (``workers`` 0) or in each of ``workers`` processes sharing the schedule, or one match per task
+    on the Ray cluster at ``ray`` (``auto``: the one this machine belongs to)."""
     if ray is not None:
         yield from _play_on_ray(cfg, matches, ray)
     elif workers <= 0 or len(matches) <= 1:
-        for match in matches:
-            yield match, play_local(cfg, match)
+        yield from play_local_at_once(cfg, matches, at_once)
     else:
-        with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-            futures = {pool.submit(play_local, cfg, match): match for match in matches}
+        yield from _play_in_processes(cfg, matches, workers, at_once)
+
+
+def _play_in_processes(cfg: LeagueConfig, matches: list[ScheduledMatch], workers: int,
+                       at_once: int) -> Iterator[tuple[ScheduledMatch, MatchResult]]:
+    """``workers`` processes, each playing matches at once and taking the next one of a shared queue as one ends."""
+    context = multiprocessing.get_context("spawn")
+    tasks, results = context.Queue(), context.Queue()
+    for match in matches:
+        tasks.put(match)
+    workers = min(workers, len(matches))
+    for _ in range(workers):
+        tasks.put(None)
+    # a process fills its places from the queue: at most its share at first, so the others get theirs
+    places = min(at_once, -(-len(matches) // workers))
+    processes = [context.Process(target=_worker, args=(cfg, tasks, results, places), daemon=True)
+                 for _ in range(workers)]
+    for process in processes:
+        process.start()
+    try:
+        running = workers
+        while running:
             try:
-                for future in as_completed(futures):
-                    yield futures[future], future.result()
-            finally:
-                for future in futures:
-                    future.cancel()
+                kind, match, payload = results.get(timeout=10.0)
+            except queue.Empty:
+                if any(p.exitcode not in (None, 0) for p in processes):
+                    raise RuntimeError("a league process died without a word (killed, or out of memory)") from None
+                continue
+            if kind == "error":
+                raise RuntimeError(f"a league process failed: {payload}")
+            if kind == "done":
+                running -= 1
+            else:
+                yield match, payload
+    finally:
+        for process in processes:
+            if process.is_alive():
+                process.terminate()
+            process.join()
+
+
+def _worker(cfg: LeagueConfig, tasks, results, at_once: int) -> None:
+    try:
+        for match, result in play_local_at_once(cfg, iter(tasks.get, None), at_once):
+            results.put(("result", match, result))
+    except BaseException:  # the league process reports it; a worker has no one else to tell
+        results.put(("error", None, traceback.format_exc()))
+    else:
+        results.put(("done", None, None))
 
 
 def _play_on_ray(cfg: LeagueConfig, matches: list[ScheduledMatch], address: str):
@@ -80,11 +124,12 @@ def _play_on_ray(cfg: LeagueConfig, matches: list[ScheduledMatch], address: str)
 
 def run_league(cfg: LeagueConfig, max_matches: int | None = None,
                on_result: Callable[[ScheduledMatch, MatchResult], None] | None = None,
-               workers: int = 0, ray: str | None = None, client=None) -> LeagueRun:
+               workers: int = 0, ray: str | None = None, at_once: int = DEFAULT_AT_ONCE, client=None) -> LeagueRun:
     """Play the missing matches of ``cfg``'s schedule (at most ``max_matches`` of them) into its store; local
-    matches ``workers`` at a time (or on Ray), server matches one by one. ``client``: how this process reaches,
-    authenticates to and trusts the match server (a ``ClientSettings``; default: the server link's endpoints,
-    with the password and key in the server's folder when it runs on this machine)."""
+    matches ``at_once`` at a time in this process or in each of ``workers`` processes (or on Ray), then the server
+    matches one by one. ``client``: how this process reaches, authenticates to and trusts the match server (a
+    ``ClientSettings``; default: the server link's endpoints, with the password and key in the server's folder when
+    it runs on this machine)."""
     planned = schedule(cfg)
     client = server_client(cfg, client)
     session = None
@@ -103,20 +148,12 @@ def run_league(cfg: LeagueConfig, max_matches: int | None = None,
                 on_result(match, result)
 
         try:
-            if workers <= 0 and ray is None:  # one at a time in schedule order, server matches among them
-                for match in todo:
-                    if needs_server(cfg, match):
-                        session = session or client.zenoh.open()
-                        record(match, play_on_server(cfg, match, session, client))
-                    else:
-                        record(match, play_local(cfg, match))
-            else:
-                for match, result in play_local_matches(cfg, [m for m in todo if not needs_server(cfg, m)],
-                                                        workers, ray):
-                    record(match, result)
-                for match in (m for m in todo if needs_server(cfg, m)):
-                    session = session or client.zenoh.open()
-                    record(match, play_on_server(cfg, match, session, client))
+            for match, result in play_local_matches(cfg, [m for m in todo if not needs_server(cfg, m)],
+                                                    workers, ray, at_once):
+                record(match, result)
+            for match in (m for m in todo if needs_server(cfg, m)):
+                session = session or client.zenoh.open()
+                record(match, play_on_server(cfg, match, session, client))
         finally:
             if session is not None:
                 session.close()

@@ -11,8 +11,8 @@ import torch
 
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.base import Policy
-from rocketdrl_ma.policies.registry import load_policy
 
+from .batched import cars_controls, seat, seat_factory
 from .checkpoint import ModelPolicy, load_model
 from .envs import EnvPool, episode_outcomes
 
@@ -80,9 +80,9 @@ def evaluate_against(checkpoint: str | Path, opponent: str, episodes: int, seed:
     trained_side = (meta["train"].get("selfplay") or {}).get("side")
     side = side or (trained_side if trained_side in TEAMS else "blue")
     env_meta = meta["env"]
+    template = ModelPolicy(model, env_meta["resolved"], f"checkpoint:{checkpoint}")
     return play_against(env_meta["config"], {**env_meta["overrides"], **(overrides or {})}, side,
-                        lambda: ModelPolicy(model, env_meta["resolved"], f"checkpoint:{checkpoint}"),
-                        lambda: load_policy(opponent), episodes, seed, n_envs)
+                        lambda: seat(template), seat_factory(opponent), episodes, seed, n_envs)
 
 
 def evaluate_policy(policy: str, config: str, episodes: int, seed: int = 10_000, n_envs: int = 4,
@@ -91,9 +91,9 @@ def evaluate_policy(policy: str, config: str, episodes: int, seed: int = 10_000,
     bot, which carries no env of its own as a checkpoint does, is scored (a teacher's own figure). The episodes are
     those ``evaluate`` plays with the same seed and ``n_envs``; ``opponent`` (a spec) drives the other team's cars,
     if the env has one."""
-    load_policy(policy)  # a bad spec fails here, before any env is built
-    return play_against(config, overrides or {}, side, lambda: load_policy(policy),
-                        None if opponent is None else (lambda: load_policy(opponent)), episodes, seed, n_envs)
+    player = seat_factory(policy)  # a bad spec fails here, before any env is built
+    return play_against(config, overrides or {}, side, player, None if opponent is None else seat_factory(opponent),
+                        episodes, seed, n_envs)
 
 
 def play_against(config: str | dict, overrides: dict, side: str, player: Callable[[], Policy],
@@ -105,8 +105,9 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
 
     Every car is a ``Policy`` acting through its own observation builder and action parser, as in a league match,
     and the env takes their controls through the lossless ``continuous`` parser, so a policy trained with other
-    sensors or actions (the seed's) plays as it learned. Each of the ``n_envs`` copies (seeded ``seed + i``) plays
-    a fixed quota of its first episodes, so short episodes are not favoured."""
+    sensors or actions (the seed's) plays as it learned. The cars of policies sharing one model (``batched.seat``)
+    go through one forward of it per decision, each with the action its own forward gives. Each of the ``n_envs``
+    copies (seeded ``seed + i``) plays a fixed quota of its first episodes, so short episodes are not favoured."""
     if side not in TEAMS:
         raise ValueError(f"side: expected one of {list(TEAMS)}, got {side!r}")
     if episodes < 1:
@@ -133,8 +134,11 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
         returns, lengths = np.zeros(n_envs), np.zeros(n_envs, np.int64)
         columns = [vec.possible_agents.index(a) for a in mine]
         while any(quota):
-            actions = np.stack([[lane.action_parser.encode(players[k][a].controls(a, lane.game_state))
-                                 for a in vec.possible_agents] for k, lane in enumerate(vec.lanes)])
+            controls = cars_controls([(players[k][a], a, lane.game_state) for k, lane in enumerate(vec.lanes)
+                                      for a in vec.possible_agents])
+            n_agents = len(vec.possible_agents)
+            actions = np.stack([[lane.action_parser.encode(c) for c in controls[k * n_agents:(k + 1) * n_agents]]
+                                for k, lane in enumerate(vec.lanes)])
             _, rewards, terminated, truncated, infos = vec.step(actions)
             returns += rewards[:, columns].mean(axis=1)
             lengths += 1
