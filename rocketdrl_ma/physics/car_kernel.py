@@ -94,6 +94,7 @@ _FLIP_PITCHLOCK_TIME = _f32(np.float32(C.FLIP_TORQUE_TIME) + np.float32(C.FLIP_P
 _FLIP_Z_DAMP_START = _f32(C.FLIP_Z_DAMP_START)
 _FLIP_Z_DAMP_END = _f32(C.FLIP_Z_DAMP_END)
 _SUPERSONIC_MAINTAIN_MAX_TIME = _f32(C.SUPERSONIC_MAINTAIN_MAX_TIME)
+_BOOST_MIN_TIME = _f32(C.BOOST_MIN_TIME)
 
 
 @njit(cache=True, inline="always")
@@ -666,14 +667,17 @@ def _apply_wheel_impulses(p, R, down, inv_i, wheels, susp_impulse, fric_impulse,
 
 @njit(cache=True, inline="always")
 def _update_boost(boost_btn, on_ground, fwd, m, car, v, dt):
-    """RocketSim's ``_UpdateBoost``: once started, boosting lasts at least 0.1 s while boost remains."""
+    """RocketSim's ``_UpdateBoost``: once started, boosting lasts at least 0.1 s while boost remains; an empty tank
+    stops it and clears its timer at once."""
     t_boost = car[CS_BOOSTING_TIME]
     if t_boost > 0.0:
-        t_boost = 0.0 if (not boost_btn and t_boost >= C.BOOST_MIN_TIME) else t_boost + dt
+        t_boost = 0.0 if (not boost_btn and t_boost >= _BOOST_MIN_TIME) else _tick(t_boost, dt)
     elif boost_btn:
-        t_boost = dt
+        t_boost = _tick(0.0, dt)
+    has_boost = car[CS_BOOST] > 0.0
+    t_boost = t_boost if has_boost else 0.0
     car[CS_BOOSTING_TIME] = t_boost
-    boosting = car[CS_BOOST] > 0.0 and t_boost > 0.0
+    boosting = t_boost > 0.0
     if boosting:
         car[CS_BOOST] = max(car[CS_BOOST] - m[MUT_BOOST_USED_PER_SECOND] * dt, 0.0)
         v += fwd * ((m[MUT_BOOST_ACCEL_GROUND] if on_ground else m[MUT_BOOST_ACCEL_AIR]) * dt)
