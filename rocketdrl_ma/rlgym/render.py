@@ -53,8 +53,9 @@ def rules_game_state(state: RLGymGameState, arena_shape: str = DEFAULT_ARENA_SHA
 class RLGymRenderer(RLGymRendererBase[RLGymGameState]):
     """An RLGym ``Renderer`` drawing with our PyBullet TinyRenderer (headless, no display needed).
 
-    :param width, height, camera: the frame size and camera of ``rocketdrl_ma.env.render.Renderer``
-        (``"broadcast"`` or ``"top"``).
+    :param width: the frame's width in pixels.
+    :param height: the frame's height in pixels.
+    :param camera: ``"broadcast"`` or ``"top"`` (``rocketdrl_ma.env.render.Renderer``'s cameras).
     :param arena_shape: the arena drawn: ``"classic"`` or ``"game"`` (as the engine's).
     :param video_path: if given (``.mp4`` or ``.gif``), every frame is appended to this video, written on
         ``close()``.
