@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import subprocess
 import sys
 from dataclasses import asdict, dataclass
@@ -118,7 +119,6 @@ def _worker() -> None:
 
 
 def _car_scene(rs, scene: dict) -> dict:
-    import math
     arena = rs.Arena(rs.GameMode.SOCCAR, tick_rate=float(TICK_RATE))
     ball = rs.BallState()
     ball.pos = rs.Vec(0.0, 3000.0, 93.15)
