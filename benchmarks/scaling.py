@@ -4,9 +4,9 @@ Every figure is **game decisions per second**: one step of one game (arena), wha
 so that learner rows and opponent rows count alike (a 2v2 self-play decision is two learner rows; a Penalty
 decision is one). Columns per config, for each worker count N:
 
-- ``env N``: the env alone, the same games (the config's env, overrides and ``n_envs`` copies split over N
+- ``env N`` (largest N only): the env alone, the same games (the config's env, overrides and ``n_envs`` copies split over N
   processes like the workers split them) with uniformly random actions, N processes at once;
-- ``collect N``: the rollout workers and the policy, no learning; ``train N``: full training (collection and PPO
+- ``collect N`` (largest N only): the rollout workers and the policy, no learning; ``train N``: full training (collection and PPO
   updates), from the first batch on;
 - ``before N`` with ``--baseline REF``: full training by the trainer at git ``REF`` (checked out into a temporary
   folder), so a change is measured against its predecessor in the same run.
@@ -37,8 +37,11 @@ from ray_cluster import LocalRayCluster  # noqa: E402  (the tests' real local cl
 
 CONFIGS = ("policies/penalty_tuned.yaml", "policies/selfplay_1v1.yaml", "policies/selfplay_2v2_from_1v1.yaml")
 
+MIN_STEPS = 100_000  # learner rows a training cell runs at least (a 2,048-row buffer would be over in seconds)
+
 CELL = r"""
 import json, sys, time
+MIN_STEPS = %d
 import yaml
 from rocketdrl_ma.policies.ppo import validate_train_config
 kind, config, workers, iterations, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
@@ -52,6 +55,7 @@ from rocketdrl_ma.policies.ppo.trainer import Probe, worker_config
 cfg = validate_train_config(raw)
 wcfg = worker_config(cfg)
 probe = Probe.of(wcfg)
+iterations = max(iterations, -(-MIN_STEPS // raw["buffer_size"]))  # enough batches for a small buffer too
 if kind in ("train", "before"):
     from rocketdrl_ma.policies.ppo import train
     from rocketdrl_ma.policies.ppo.workers import WorkerPlan
@@ -141,7 +145,7 @@ def cell(kind: str, config: str, workers: int, iterations: int, pythonpath: Path
     with tempfile.TemporaryDirectory() as out:
         env = {**os.environ, "PYTHONPATH": str(pythonpath), "RL_WARNINGS": "0"}
         script = Path(out) / "cell.py"  # a file, not -c: a profile names its process by the command line
-        script.write_text(CELL)
+        script.write_text(CELL % MIN_STEPS)
         args = [sys.executable, str(script), kind, config, str(workers), str(iterations), out, *([ray] if ray else [])]
         proc = subprocess.run(_command(args, profile), cwd=pythonpath, env=env, capture_output=True, text=True)
         if proc.returncode != 0:
@@ -194,8 +198,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         before = baseline_tree(args.baseline, Path(tmp)) if args.baseline else None
         head = ["config"]
-        for n in args.workers:
-            head += [f"env {n}", f"collect {n}", f"train {n}"] + ([f"before {n}"] if before else [])
+        for n in args.workers:  # the ratios read env and collect at the largest N only
+            head += ([f"env {n}", f"collect {n}"] if n == last else []) + [f"train {n}"]
+            head += [f"before {n}"] if before else []
         head += [f"train {last} / env {last}", f"collect {last} / env {last}", f"learner share {last}"]
         if last != first:
             head += [f"train {last} / train {first}"]
@@ -212,9 +217,10 @@ def main() -> None:
                 return args.profile / f"{name}-{kind}{n}.txt" if args.profile else None
 
             for n in args.workers:
-                r[f"env {n}"] = env_cell(config, n, args.env_seconds)["rate"]
-                r[f"collect {n}"] = cell("collect", config, n, args.iterations, ROOT,
-                                         profile=profiled("collect", n))["rate"]
+                if n == last:
+                    r[f"env {n}"] = env_cell(config, n, args.env_seconds)["rate"]
+                    r[f"collect {n}"] = cell("collect", config, n, args.iterations, ROOT,
+                                             profile=profiled("collect", n))["rate"]
                 trained = cell("train", config, n, args.iterations, ROOT, profile=profiled("train", n))
                 r[f"train {n}"], r[f"learner {n}"] = trained["rate"], trained["learner"]
                 if before:
@@ -227,8 +233,8 @@ def main() -> None:
                     cluster.stop()
             row = [config]
             for n in args.workers:
-                row += [f"{r[f'env {n}']:,.0f}", f"{r[f'collect {n}']:,.0f}", f"{r[f'train {n}']:,.0f}"]
-                row += [f"{r[f'before {n}']:,.0f}"] if before else []
+                row += [f"{r[f'env {n}']:,.0f}", f"{r[f'collect {n}']:,.0f}"] if n == last else []
+                row += [f"{r[f'train {n}']:,.0f}"] + ([f"{r[f'before {n}']:,.0f}"] if before else [])
             row += [f"{r[f'train {last}'] / r[f'env {last}']:.2f}", f"{r[f'collect {last}'] / r[f'env {last}']:.2f}",
                     f"{r[f'learner {last}']:.0%}"]
             if last != first:

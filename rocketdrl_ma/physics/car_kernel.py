@@ -55,14 +55,15 @@ CS_AUTOFLIP_TIMER = 38
 CS_AUTOFLIP_SCALE = 39
 CS_BODY_CONTACT = 40  # the hitbox touched the arena last tick
 CS_BODY_NORMAL_X = 41  # three columns: that contact's normal
-CS_SIZE = 44
+CS_PUSHBACK_0 = 44  # four columns: each wheel's hard-stop push-back, kept while the wheel stays on the arena
+CS_SIZE = 48
 # Memory of earlier ticks that CarState does not carry (the last jump input for edge detection, boost's minimum
 # duration, the wheel set-up Bullet applies one tick late, autoflip, body contact): set_state clears it, so a
 # state set on a used car plays on exactly as on a new car (RocketSim's CarState carries last_controls likewise).
 CS_TICK_MEMORY = (CS_BOOSTING_TIME, CS_IS_BOOSTING, CS_LAST_JUMP, CS_STEER_ANGLE, CS_ENGINE, CS_BRAKE,
                   *range(CS_LAT_FRICTION_0, CS_LAT_FRICTION_0 + 4), *range(CS_LONG_FRICTION_0, CS_LONG_FRICTION_0 + 4),
                   CS_IS_AUTOFLIPPING, CS_AUTOFLIP_TIMER, CS_AUTOFLIP_SCALE, CS_BODY_CONTACT,
-                  *range(CS_BODY_NORMAL_X, CS_BODY_NORMAL_X + 3))
+                  *range(CS_BODY_NORMAL_X, CS_BODY_NORMAL_X + 3), *range(CS_PUSHBACK_0, CS_PUSHBACK_0 + 4))
 
 _THROTTLE_CURVE = np.array(C.THROTTLE_TORQUE_CURVE)
 _STEER_CURVE = np.array(C.STEER_ANGLE_CURVE)
@@ -94,6 +95,7 @@ _FLIP_PITCHLOCK_TIME = _f32(np.float32(C.FLIP_TORQUE_TIME) + np.float32(C.FLIP_P
 _FLIP_Z_DAMP_START = _f32(C.FLIP_Z_DAMP_START)
 _FLIP_Z_DAMP_END = _f32(C.FLIP_Z_DAMP_END)
 _SUPERSONIC_MAINTAIN_MAX_TIME = _f32(C.SUPERSONIC_MAINTAIN_MAX_TIME)
+_BOOST_MIN_TIME = _f32(C.BOOST_MIN_TIME)
 
 
 @njit(cache=True, inline="always")
@@ -237,8 +239,8 @@ def car_pre_tick(shape, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest
         num_contact, num_world = _cast_wheel_rays(shape, p, R, down, wheel_conn[i], wheel_ray_len[i],
                                                   ball_pos[car_arena[i]], ball_radius, wheels, car, scratch)
         on_ground = num_contact >= C.WHEELS_FOR_ON_GROUND
-        _suspension_impulses(p, R, down, v0, w0, inv_inertia[i], wheel_rest[i], wheel_radius[i], wheel_ray_len[i],
-                             wheel_is_front[i], wheels, susp_impulse, scratch, dt)
+        _suspension_impulses(p, R, down, v0, w0, inv_inertia[i], wheel_rest[i], wheel_radius[i], wheel_is_front[i],
+                             wheels, car, susp_impulse, scratch, dt)
         _friction_impulses(p, R, frame, v0, w0, inv_inertia[i], wheel_is_front[i], wheels, car, fric_impulse,
                            fric_rel, scratch, dt)
         v_fwd = _update_wheels(frame, v0, w0, p, c, wheel_is_front[i], three_wheel[i], num_contact, num_world,
@@ -326,19 +328,25 @@ def _cast_wheel_rays(shape, p, R, down, conn, ray_len, ball_pos, ball_radius, wh
 
 
 @njit(cache=True, inline="always")
-def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, ray_len, is_front, wheels, susp_impulse,
-                         scratch, dt):
+def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, is_front, wheels, car, susp_impulse, scratch,
+                         dt):
     """btVehicleRL's suspension from the start-of-tick velocity: a spring-damper that never pulls, plus the hard
-    stop, an inelastic push-back once a wheel nears the end of its short soft travel."""
-    hit, _, dist, normal, hard = wheels
+    stop, an inelastic push-back of a wheel on the arena that comes closer than its rest length plus radius."""
+    hit, hit_world, dist, normal, hard = wheels
     rel, v_cp, cross, _, _ = scratch
     susp_impulse[:] = 0.0
     for k in range(4):
         if not hit[k]:
+            car[CS_PUSHBACK_0 + k] = 0.0
             continue
         n = normal[k]
         _contact_point_velocity(hard[k], down, dist[k], p, v0, w0, rel, cross, v_cp)
         rest = rest_len[k]
+        gap = dist[k] - (rest + radius[k] - C.SUSPENSION_SUBTRACTION)
+        if hit_world[k] and gap < 0.0:
+            # btVehicleRL keeps the last push-back while the wheel stays in contact above the threshold
+            m_eff = 1.0 / _inv_mass_along(R, inv_i, rel, n)
+            car[CS_PUSHBACK_0 + k] = max(m_eff * (-C.SOLVER_ERP * gap / dt - vdot(n, v_cp)), 0.0) / 4.0
         susp_len = min(max(dist[k] - radius[k], rest - C.SUSPENSION_MAX_TRAVEL), rest + C.SUSPENSION_MAX_TRAVEL)
         n_up = -vdot(n, down)  # how squarely the surface faces the suspension
         if n_up > 0.1:
@@ -352,10 +360,7 @@ def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, ray_len, i
         force = (C.SUSPENSION_STIFFNESS * (rest - susp_len) * clipped_inv - damping * rel_vel) * scale
         if force <= 0.0:
             continue  # the suspension never pulls
-        gap = dist[k] - (ray_len[k] - radius[k])
-        m_eff = 1.0 / _inv_mass_along(R, inv_i, rel, n)
-        push = max(m_eff * (-0.2 * gap / dt - vdot(n, v_cp)), 0.0) * (1.0 / 1.5) / 4.0
-        amount = force * dt + push
+        amount = force * dt + car[CS_PUSHBACK_0 + k]
         for j in range(3):
             susp_impulse[k, j] = n[j] * amount
 
@@ -666,14 +671,17 @@ def _apply_wheel_impulses(p, R, down, inv_i, wheels, susp_impulse, fric_impulse,
 
 @njit(cache=True, inline="always")
 def _update_boost(boost_btn, on_ground, fwd, m, car, v, dt):
-    """RocketSim's ``_UpdateBoost``: once started, boosting lasts at least 0.1 s while boost remains."""
+    """RocketSim's ``_UpdateBoost``: once started, boosting lasts at least 0.1 s while boost remains; an empty tank
+    stops it and clears its timer at once."""
     t_boost = car[CS_BOOSTING_TIME]
     if t_boost > 0.0:
-        t_boost = 0.0 if (not boost_btn and t_boost >= C.BOOST_MIN_TIME) else t_boost + dt
+        t_boost = 0.0 if (not boost_btn and t_boost >= _BOOST_MIN_TIME) else _tick(t_boost, dt)
     elif boost_btn:
-        t_boost = dt
+        t_boost = _tick(0.0, dt)
+    has_boost = car[CS_BOOST] > 0.0
+    t_boost = t_boost if has_boost else 0.0
     car[CS_BOOSTING_TIME] = t_boost
-    boosting = car[CS_BOOST] > 0.0 and t_boost > 0.0
+    boosting = t_boost > 0.0
     if boosting:
         car[CS_BOOST] = max(car[CS_BOOST] - m[MUT_BOOST_USED_PER_SECOND] * dt, 0.0)
         v += fwd * ((m[MUT_BOOST_ACCEL_GROUND] if on_ground else m[MUT_BOOST_ACCEL_AIR]) * dt)

@@ -63,6 +63,7 @@ SUSPENSION_FORCE_SCALE_FRONT = 35.75
 SUSPENSION_FORCE_SCALE_BACK = 54.265
 SUSPENSION_MAX_TRAVEL = 12.0
 SUSPENSION_SUBTRACTION = 2.5
+SOLVER_ERP = 0.2  # Bullet's default error reduction: the share of a wheel's hard-stop overlap undone per tick
 WHEELS_FOR_ON_GROUND = 3
 
 # ---------------------------------------------------------------- driving

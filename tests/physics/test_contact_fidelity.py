@@ -51,6 +51,12 @@ def car_car(rocketsim_oracle):
     return scenes, cs.run_rocketsim(scenes), cs.run_ours(scenes)
 
 
+@pytest.fixture(scope="module")
+def meetings(rocketsim_oracle):
+    scenes = cs.meeting_grid()
+    return scenes, cs.run_rocketsim(scenes), cs.run_ours(scenes)
+
+
 CAR_BALL_FAMILIES = list(_families(cs.car_ball_grid()))
 CAR_CAR_FAMILIES = list(_families(cs.car_car_grid()))
 BOUNCE_FAMILIES = list(_families(cs.bounce_grid()))
@@ -84,10 +90,8 @@ def test_floor_bounce(bounces, family):
                                    err_msg=f"{scenes[i].key}: the ball's path left RocketSim's")
 
 
-@pytest.mark.parametrize("family", CAR_CAR_FAMILIES)
-def test_car_car_hit(car_car, family):
-    scenes, theirs, ours = car_car
-    for i in _families(scenes)[family]:
+def _assert_car_car_hits_match(scenes, theirs, ours, indices):
+    for i in indices:
         key, a, b, scene = scenes[i].key, theirs[i], ours[i], scenes[i]
         assert cs.car_hit_outcome(b) == cs.car_hit_outcome(a), (
             f"{key}: ours {cs.car_hit_outcome(b)}, RocketSim {cs.car_hit_outcome(a)}")
@@ -100,6 +104,44 @@ def test_car_car_hit(car_car, family):
                                  f"6 ticks after the hit ({100 * err:.1f} %)")
 
 
+@pytest.mark.parametrize("family", CAR_CAR_FAMILIES)
+def test_car_car_hit(car_car, family):
+    scenes, theirs, ours = car_car
+    _assert_car_car_hits_match(scenes, theirs, ours, _families(scenes)[family])
+
+
+# Measured worst speed error over the 8 phases (the outcome, which cars bumped, matches in every cell): the two
+# contact solvers part obliquely meeting boxes differently (docs/guides/fidelity.md).
+MEETING_GAPS = {"meeting-60-1000": 45.1, "meeting-60-2000": 45.4, "meeting-90-1000": 66.0, "meeting-90-2000": 81.8,
+                "meeting-120-1000": 5.4, "meeting-120-2000": 63.4, "meeting-150-1000": 24.3,
+                "meeting-150-2000": 24.2}
+
+
+def _meeting_param(family: str):
+    gap = MEETING_GAPS.get(family)
+    if gap is None:
+        return family
+    reason = f"a car's speed 6 ticks after the meeting up to {gap} % off RocketSim's"
+    if family.startswith("meeting-90-"):
+        reason += " (the bigger push goes to the other car)"
+    return pytest.param(family, marks=pytest.mark.xfail(strict=True, reason=reason))
+
+
+def test_car_car_meeting_bumps_the_same_cars(meetings):
+    """Every cell and phase: the same outcome as RocketSim's (none below 90 degrees, both cars bumped from 90)."""
+    scenes, theirs, ours = meetings
+    for scene, a, b in zip(scenes, theirs, ours):
+        assert cs.car_hit_outcome(b) == cs.car_hit_outcome(a), (
+            f"{scene.key}: ours {cs.car_hit_outcome(b)}, RocketSim {cs.car_hit_outcome(a)}")
+
+
+@pytest.mark.parametrize("family", [_meeting_param(f) for f in _families(cs.meeting_grid())])
+def test_car_car_meeting(meetings, family):
+    """Team-mates' paths crossing 30-150 degrees apart (mirror images): the same cars bumped and their speeds."""
+    scenes, theirs, ours = meetings
+    _assert_car_car_hits_match(scenes, theirs, ours, _families(scenes)[family])
+
+
 def test_the_grids_are_the_issue_s():
     """Speeds 500-2300 x ball centred / 40 uu off x five ways of meeting it; bounces 150-3000 straight and at 45
     degrees; T-bone, rear, head-on, sideways slide, drift angles, supersonic demos."""
@@ -107,3 +149,4 @@ def test_the_grids_are_the_issue_s():
     assert min(cs.BOUNCE_SPEEDS) == 150.0 and max(cs.BOUNCE_SPEEDS) == 3000.0
     assert {s.key.split("-")[0] for s in cs.car_car_grid()} == {"tbone", "rear", "headon", "slide", "drift", "demo"}
     assert cs.PHASES >= 8 and math.isclose(cs._phase_shift(1200.0, 0), 1200.0 / 120 / 16)
+    assert min(cs.MEETING_ANGLES) == 30.0 and max(cs.MEETING_ANGLES) == 150.0

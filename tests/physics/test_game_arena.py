@@ -9,6 +9,7 @@ import pytest
 from rocketdrl_ma import physics
 from rocketdrl_ma.physics.arena_geometry import arena_sdf
 from rocketdrl_ma.physics.arena_shape import ARENA_SHAPES, arena_shape_index
+from rocketdrl_ma.physics.state import yaw_rot_mat
 from rocketdrl_ma.physics.game_arena import (GAME_ARENA, game_arena_mesh, game_arena_raycast, game_arena_sdf,
                                              game_arena_sdf_many, game_surface_contacts)
 from rocketdrl_ma.physics.world import M_PER_UU
@@ -135,20 +136,21 @@ def test_a_car_dropped_on_its_side_onto_a_fillet_touches_the_mesh_on_the_distanc
         arena.close()
 
 
-def test_a_car_driven_into_the_side_wall_fillet_touches_the_mesh_on_the_distance_field():
+def test_a_car_sliding_into_the_side_wall_fillet_touches_the_mesh_on_the_distance_field():
+    """Sideways, so the hitbox meets the fillet (driven straight at it, a car rides up on its wheels and its
+    hitbox never touches, as RocketSim's on the meshes)."""
     arena = physics.Arena(arena_shape="game")
     try:
         car = arena.add_car(0)
-        car.set_state(physics.CarState(pos=np.array([3300.0, 0.0, 17.0]), rot_mat=np.eye(3),
-                                       vel=np.array([1400.0, 0.0, 0.0])))
-        car.set_controls(physics.CarControls(throttle=1.0, boost=True))
+        car.set_state(physics.CarState(pos=np.array([3900.0, 0.0, 17.0]), rot_mat=yaw_rot_mat(0.5 * np.pi),
+                                       vel=np.array([2000.0, 0.0, 0.0])))
         touched, heights = [], []
         for _ in range(240):
             arena.step(1)
             touched.extend(_arena_contacts(arena, car))
             heights.append(car.get_state().pos[2])
-        assert max(heights) > 400.0  # up the fillet onto the wall
-        assert len(touched) > 10  # the nose meets the fillet's polygon where it turns up the wall
+        assert max(heights) > 400.0  # thrown up the fillet
+        assert len(touched) > 10  # the hitbox's side meets the fillet's polygon
         assert np.abs(game_arena_sdf_many(np.array(touched))).max() < MESH_TOLERANCE_UU
     finally:
         arena.close()

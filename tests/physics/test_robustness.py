@@ -77,8 +77,9 @@ def test_a_million_random_ticks_stay_finite_and_inside():
         live = batch.arrays().car_is_demoed == 0.0
         worst_car = min(worst_car, min(arena_sdf(*p)[0] for p in batch.car_pos[live]))
         worst_ball = min(worst_ball, min(_surface_distance(p) for p in batch.ball_pos))
-    # Centres never leave the playable space, and no ball sinks deep into a surface.
-    assert worst_car > 0.0, worst_car
+    # Centres stay in the playable space (a car wedged on its side against a goal post's edge can sit its centre
+    # up to ~1.3 uu past it: docs/experiments/arena-mesh.md), and no ball sinks deep into a surface.
+    assert worst_car > -2.0, worst_car
     assert worst_ball > 0.25 * 91.25, worst_ball
     batch.close()
 

@@ -24,10 +24,10 @@ def _play(blue: str, orange: str, clock_s: float, seed: int = 0) -> Match:
 
 @pytest.mark.parametrize("seed", [4, 6, 9])  # kickoff spawns (0, -4608), (-256, -3840), (-2048, -2560)
 def test_ball_chaser_scores_on_an_empty_net(seed):
-    """From the right-hand diagonal spawn (2048, -2560; seed 0) it pushes the ball wide, follows it into the net
-    and stays there nose first: the ball-chaser never backs off a wall (the flip-chaser does)."""
+    """Against an idle car it scores, and more than it concedes: chasing the ball from behind it knocks one into its
+    own net now and then (seed 4: 3-2 since the wheels' hard stop follows RocketSim's)."""
     m = _play("ball_chaser", "idle", clock_s=60.0, seed=seed)
-    assert m.score[0] >= 1 and m.score[1] == 0
+    assert m.score[0] >= 1 and m.score[0] > m.score[1], m.score
 
 
 @pytest.mark.slow

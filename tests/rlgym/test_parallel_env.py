@@ -109,7 +109,9 @@ def test_spaces_and_bad_input():
     with pytest.raises(ValueError, match="rlgym_env"):
         RLGymParallelEnv(object())
     with pytest.raises(ValueError, match="render_mode"):
-        RLGymParallelEnv(readme_env(RocketDRLEngine(), 1), render_mode="rgb_array")
+        RLGymParallelEnv(readme_env(RocketDRLEngine(), 1), render_mode="ansi")
+    with pytest.raises(ValueError, match="rgb_renderer"):
+        RLGymParallelEnv(readme_env(RocketDRLEngine(), 1), rgb_renderer=object())
     env = RLGymParallelEnv(readme_env(RocketDRLEngine(), 1))
     env.reset(seed=1)
     with pytest.raises(ValueError, match=r"missing for agents \['orange-0'\]"):
