@@ -71,7 +71,7 @@ _FAR = 1e30
 
 
 # ================================================================= distance fields
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _seg(px, py, ax, ay, bx, by, best, cx, cy):
     """Closest point of segment ab to p if it beats the squared distance ``best`` (else the old one)."""
     ex, ey = bx - ax, by - ay
@@ -84,7 +84,7 @@ def _seg(px, py, ax, ay, bx, by, best, cx, cy):
     return best, cx, cy
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _field(x, y, z):
     """Exact signed distance to the rounded field (positive inside) and its unit gradient (into the field)."""
     sx = 1.0 if x >= 0.0 else -1.0
@@ -120,7 +120,7 @@ def _field(x, y, z):
     return R - sz, 0.0, 0.0, -gz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _goal(x, y, z):
     """Exact signed distance to the goal box on the side of y (positive inside) and its unit gradient."""
     sx = 1.0 if x >= 0.0 else -1.0
@@ -147,7 +147,7 @@ def _goal(x, y, z):
     return -o, -gx * ox * inv, -gy * oy * inv, -gz * oz * inv
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _fairing(x, y, z):
     """Signed distance to the fairing beside the nearest post (positive inside: exact there; outside a lower
     bound) and its gradient into the fairing. Its section across the back wall is a strip 10 uu wide inside the
@@ -179,7 +179,7 @@ def _fairing(x, y, z):
     return best, sx * gx, sy * gy, gz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def arena_sdf(x, y, z):
     """(d, nx, ny, nz): signed distance in uu (positive in the playable interior, negative in solid) and the
     unit normal (gradient) pointing into the interior."""
@@ -193,7 +193,7 @@ def arena_sdf(x, y, z):
     return d, nx, ny, nz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _buried(qx, qy, qz, own):
     """Whether a surface point of piece ``own`` (0 field, 1 goal box, 2 fairing) lies inside another piece."""
     if own != 0 and _field(qx, qy, qz)[0] > 1e-3:
@@ -203,7 +203,7 @@ def _buried(qx, qy, qz, own):
     return own != 2 and _fairing(qx, qy, qz)[0] > 1e-3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _add_contact(out, n, x, y, z, qx, qy, qz, nx, ny, nz, reach, own):
     """Row n of ``out`` = the surface point q (normal n) if it is within reach, real and new. Returns the count."""
     d = math.sqrt((x - qx) ** 2 + (y - qy) ** 2 + (z - qz) ** 2)
@@ -218,7 +218,7 @@ def _add_contact(out, n, x, y, z, qx, qy, qz, nx, ny, nz, reach, own):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _add_face(out, n, x, y, z, nx, ny, nz, c, reach, own):
     """The foot of (x, y, z) on the plane n . p = c of piece ``own``'s boundary (n pointing into the piece), if
     the foot lies on the piece (inside its other faces)."""
@@ -233,7 +233,7 @@ def _add_face(out, n, x, y, z, nx, ny, nz, c, reach, own):
     return _add_contact(out, n, x, y, z, qx, qy, qz, nx, ny, nz, reach, own)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _add_edge(out, n, x, y, z, qx, qy, qz, reach):
     """An edge point q of the surface (where two pieces meet), the normal pointing from q to (x, y, z): only if the
     point lies in the arena (an edge the sphere can reach without crossing a surface first)."""
@@ -243,7 +243,7 @@ def _add_edge(out, n, x, y, z, qx, qy, qz, reach):
     return _add_contact(out, n, x, y, z, qx, qy, qz, (x - qx) / d, (y - qy) / d, (z - qz) / d, reach, -1)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def surface_contacts(x, y, z, reach, out):
     """Where a sphere at (x, y, z) reaching ``reach`` uu meets the arena: rows (distance, nx, ny, nz) of ``out``
     (normals into the arena), one per surface it reaches, only real ones. Returns the number of rows.
@@ -283,26 +283,26 @@ def surface_contacts(x, y, z, reach, out):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def arena_distance(x, y, z):
     """The signed distance of ``arena_sdf`` alone."""
     return arena_sdf(x, y, z)[0]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def is_inside_arena(x, y, z, margin):
     """True if (x, y, z) is inside the playable space with at least ``margin`` uu of clearance."""
     return arena_sdf(x, y, z)[0] >= margin
 
 
 # ================================================================= ray casts
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _field_along(ox, oy, oz, dx, dy, dz, t):
     f, nx, ny, nz = _field(ox + dx * t, oy + dy * t, oz + dz * t)
     return f, nx * dx + ny * dy + nz * dz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _field_interval(ox, oy, oz, dx, dy, dz, max_len):
     """[a, b] of the ray inside the (convex) field, clipped to start at 0; a = _FAR if it never enters
     before max_len; b = _FAR if it is still inside at max_len. f(t) is concave, so Newton's method from a
@@ -337,7 +337,7 @@ def _field_interval(ox, oy, oz, dx, dy, dz, max_len):
     return a, max(t, a)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _slab(o, d, lo, hi):
     """Entry/exit parameters of a ray coordinate in [lo, hi] (entry > exit if it misses)."""
     if abs(d) < 1e-300:
@@ -351,7 +351,7 @@ def _slab(o, d, lo, hi):
     return t1, t2
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _box_interval(ox, oy, oz, dx, dy, dz, ylo, yhi):
     """[a, b] of the ray inside a goal box and the inward normal of the face it leaves through."""
     ax, bx = _slab(ox, dx, -GOAL_W, GOAL_W)
@@ -369,7 +369,7 @@ def _box_interval(ox, oy, oz, dx, dy, dz, ylo, yhi):
     return a, b, nx, ny, nz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _fairing_interval(ox, oy, oz, dx, dy, dz, sx, sy):
     """[a, b] of the ray inside the fairing on the (sx, sy) side and the inward normal of the face it leaves by:
     the slabs of its flat faces clip the interval of the (convex) union of the half-space |x| <= W and the pipe's
@@ -446,7 +446,7 @@ def _fairing_interval(ox, oy, oz, dx, dy, dz, sx, sy):
     return start, end, -bx, -by, -bz
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _near_a_fairing(ox, oy, oz, dx, dy, dz, max_len):
     """Whether the ray's bounding box reaches any fairing's (most rays, far from the goals, skip them)."""
     ex, ey, ez = ox + dx * max_len, oy + dy * max_len, oz + dz * max_len
@@ -457,7 +457,7 @@ def _near_a_fairing(ox, oy, oz, dx, dy, dz, max_len):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def arena_raycast(ox, oy, oz, dx, dy, dz, max_len):
     """First surface hit of the unit ray (dx, dy, dz) from (ox, oy, oz) within max_len uu:
     (hit, t, nx, ny, nz), the normal pointing into the interior. An origin in solid hits at t = 0 with the
@@ -504,7 +504,7 @@ def arena_raycast(ox, oy, oz, dx, dy, dz, max_len):
     return True, t_end, nx, ny, nz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _sdf_many(points):
     out = np.empty(points.shape[0])
     for i in range(points.shape[0]):

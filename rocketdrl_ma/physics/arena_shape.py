@@ -27,7 +27,7 @@ def arena_shape_index(arena_shape: str) -> int:
     return ARENA_SHAPES.index(arena_shape)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def shape_surface_contacts(shape, x, y, z, reach, out):
     """``surface_contacts`` of the shape (a literal: the other branch is compiled away)."""
     if shape == CLASSIC:
@@ -35,7 +35,7 @@ def shape_surface_contacts(shape, x, y, z, reach, out):
     return game_surface_contacts(x, y, z, reach, out)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def shape_raycast(shape, ox, oy, oz, dx, dy, dz, max_len):
     """``arena_raycast`` of the shape (a literal: the other branch is compiled away)."""
     if shape == CLASSIC:
@@ -43,7 +43,7 @@ def shape_raycast(shape, ox, oy, oz, dx, dy, dz, max_len):
     return game_arena_raycast(ox, oy, oz, dx, dy, dz, max_len)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def shape_distance(shape, x, y, z):
     """The shape's signed distance from (x, y, z) to its surface (a literal: the other branch is compiled away)."""
     if shape == CLASSIC:

@@ -59,7 +59,7 @@ WORLD_POINT = -2
 _ROW = 21
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _world_inv_inertia(R, inv_local):
     """R diag(inv_local) R^T: a car's inverse inertia in world axes."""
     out = np.empty((3, 3))
@@ -70,7 +70,7 @@ def _world_inv_inertia(R, inv_local):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _box_contact(ball, car_pos, R, offset, half):
     """Bullet's sphere-box test against a car's hitbox: (gap, unit normal box -> ball, point on the box), world."""
     rel = ball - car_pos
@@ -102,7 +102,7 @@ def _box_contact(ball, car_pos, R, offset, half):
     return gap, normal, point
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _static_box_sdf(p, box):
     """Distance from ``p`` to an axis-aligned box (centre box[1:4], half extents box[4:7]), positive outside, and
     its unit gradient."""
@@ -125,7 +125,7 @@ def _static_box_sdf(p, box):
     return q[a], n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _inv_mass(n, rb, rc, has_car, inv_ic, car_inv_mass):
     """1 / effective mass of a unit impulse along ``n`` at the levers ``rb`` (ball) and ``rc`` (car)."""
     ab = vcross(rb, n)
@@ -137,7 +137,7 @@ def _inv_mass(n, rb, rc, has_car, inv_ic, car_inv_mass):
     return k
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _rel_vel(d, rb, rc, has_car, vb, wb, vc, wc):
     """Velocity of the ball's contact point relative to the car's (or the arena's) along ``d``."""
     v = vdot(d, vb) + vdot(d, vcross(wb, rb))
@@ -146,7 +146,7 @@ def _rel_vel(d, rb, rc, has_car, vb, wb, vc, wc):
     return v
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _apply(d, j, rb, rc, has_car, vb, wb, vc, wc, inv_ic):
     """Impulse ``j`` along ``d`` on the ball, and its opposite on the car."""
     ab = vcross(rb, d)
@@ -160,7 +160,7 @@ def _apply(d, j, rb, rc, has_car, vb, wb, vc, wc, inv_ic):
             wc[a] -= iac[a] * j
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _friction_direction(n, rel):
     """The sliding direction (relative velocity less its normal part), or any direction along the surface."""
     t = rel - n * vdot(rel, n)
@@ -177,7 +177,7 @@ def _friction_direction(n, rel):
     return np.array([-n[1] * k, n[0] * k, 0.0])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ball_tick(shape, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
               car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z, tick, dt,
               touched, touch_point, touch_normal, extra_vel, car_push):
@@ -296,7 +296,7 @@ def ball_tick(shape, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot,
     return n_touch
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ball_tick_classic(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
                       car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z,
                       tick, dt, touched, touch_point, touch_normal, extra_vel, car_push):
@@ -306,7 +306,7 @@ def ball_tick_classic(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot
                      mut, gravity_z, tick, dt, touched, touch_point, touch_normal, extra_vel, car_push)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ball_tick_game(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
                    car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z,
                    tick, dt, touched, touch_point, touch_normal, extra_vel, car_push):
@@ -316,7 +316,7 @@ def ball_tick_game(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, c
                      mut, gravity_z, tick, dt, touched, touch_point, touch_normal, extra_vel, car_push)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _world_point(row, normal, gap):
     """One point where the ball touches the arena: a row that only pushes an overlap apart."""
     row[:] = 0.0
@@ -326,7 +326,7 @@ def _world_point(row, normal, gap):
     row[_CAR] = WORLD_POINT
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _extra_hit(ball_pos, ball_vel, car_pos, car_vel, R, last_extra_tick, i, tick, scale):
     """Rocket League's extra push of car ``i`` (``Ball::_OnHit``): at most once every other tick per car."""
     out = np.zeros(3)
@@ -352,7 +352,7 @@ def _extra_hit(ball_pos, ball_vel, car_pos, car_vel, R, last_extra_tick, i, tick
     return hit_dir * rel_speed * factor * scale
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _solve(rows, n_rows, vb, wb, car_vel, car_ang_vel, car_rot, car_inv_inertia, grav, dt):
     """Sequential impulses over one ball's contact rows; ``vb``/``wb`` and the touching cars' velocities change."""
     inv_ic = np.zeros((n_rows, 3, 3))

@@ -30,7 +30,7 @@ def read_rows(bodies: list[int], client: int) -> np.ndarray:
     return np.fromiter(flat, np.float64, len(flat)).reshape(len(bodies), ROW_SIZE)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def quat_to_mat(q, out):
     """An xyzw quaternion to a 3x3 rotation matrix, written into ``out``."""
     x, y, z, w = q[0], q[1], q[2], q[3]
@@ -45,7 +45,7 @@ def quat_to_mat(q, out):
     out[2, 2] = 1 - 2 * (x * x + y * y)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def unpack_rows(rows, cars, origins, car_arena, car_pos, car_quat, car_rot, car_vel, car_ang_vel):
     """Row ``r`` of ``read_rows`` into car ``cars[r]``, in uu relative to its arena's origin (the arithmetic of a
     whole-array ``pos * UU_PER_M - origin``)."""

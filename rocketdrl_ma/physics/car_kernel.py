@@ -98,13 +98,13 @@ _SUPERSONIC_MAINTAIN_MAX_TIME = _f32(C.SUPERSONIC_MAINTAIN_MAX_TIME)
 _BOOST_MIN_TIME = _f32(C.BOOST_MIN_TIME)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _tick(timer, dt):
     """``timer + dt`` as RocketSim's float32 timers add it (both operands rounded to float32 first)."""
     return float(np.float32(np.float32(timer) + np.float32(dt)))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def interp(curve, x):
     """Piecewise-linear curve lookup, clamped at both ends (RocketSim's LinearPieceCurve)."""
     if x <= curve[0, 0]:
@@ -119,7 +119,7 @@ def interp(curve, x):
 
 # The helpers below run several times per car and tick: they work on scalars (the arithmetic of
 # ``mat_t_vec(R, vcross(...))`` and friends term by term) because a small array per step cost more than the maths.
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _inv_mass_along(R, inv_inertia, rel, direction):
     """1/m_eff of a unit impulse along ``direction`` applied at offset ``rel`` from the centre of mass."""
     x = rel[1] * direction[2] - rel[2] * direction[1]
@@ -131,7 +131,7 @@ def _inv_mass_along(R, inv_inertia, rel, direction):
     return 1.0 / C.CAR_MASS + inv_inertia[0] * c0 ** 2 + inv_inertia[1] * c1 ** 2 + inv_inertia[2] * c2 ** 2
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _apply_impulse(R, inv_inertia, v, w, rel, impulse):
     for j in range(3):
         v[j] += impulse[j] / C.CAR_MASS
@@ -145,7 +145,7 @@ def _apply_impulse(R, inv_inertia, v, w, rel, impulse):
         w[j] += R[j, 0] * s0 + R[j, 1] * s1 + R[j, 2] * s2
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _ray_sphere(origin, direction, center, radius):
     """Distance along a unit ray to a sphere, or -1 if missed (origins inside the sphere miss)."""
     ox, oy, oz = origin[0] - center[0], origin[1] - center[1], origin[2] - center[2]
@@ -188,7 +188,7 @@ class CarFrame(NamedTuple):
     down: np.ndarray
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def car_pre_tick(shape, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
                  wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut, dt):
     """Advance every active, non-demoed car's model by one tick in an arena of ``shape`` (``arena_shape``'s integer,
@@ -264,7 +264,7 @@ def car_pre_tick(shape, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest
     return n_unwritable
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def car_pre_tick_classic(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
                          wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs,
                          mut, dt):
@@ -274,7 +274,7 @@ def car_pre_tick_classic(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_res
                         ball_radius, cs, mut, dt)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def car_pre_tick_game(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
                       wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut,
                       dt):
@@ -284,7 +284,7 @@ def car_pre_tick_game(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, 
                         mut, dt)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _cast_wheel_rays(shape, p, R, down, conn, ray_len, ball_pos, ball_radius, wheels, car, scratch):
     """Each wheel's ray from its hard point along car-down, against the arena (analytically) and this arena's
     ball; records the contacts in ``car``. Returns (wheels in contact, wheels on the arena)."""
@@ -327,7 +327,7 @@ def _cast_wheel_rays(shape, p, R, down, conn, ray_len, ball_pos, ball_radius, wh
     return num_contact, num_world
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, is_front, wheels, car, susp_impulse, scratch,
                          dt):
     """btVehicleRL's suspension from the start-of-tick velocity: a spring-damper that never pulls, plus the hard
@@ -365,7 +365,7 @@ def _suspension_impulses(p, R, down, v0, w0, inv_i, rest_len, radius, is_front, 
             susp_impulse[k, j] = n[j] * amount
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _contact_point_velocity(hard_point, down, dist, p, v0, w0, rel, cross, v_cp):
     """A wheel's contact point relative to the centre of mass (``rel``) and the start-of-tick velocity there."""
     for j in range(3):
@@ -375,7 +375,7 @@ def _contact_point_velocity(hard_point, down, dist, p, v0, w0, rel, cross, v_cp)
         v_cp[j] = v0[j] + cross[j]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _friction_impulses(p, R, frame, v0, w0, inv_i, is_front, wheels, car, fric_impulse, fric_rel, scratch, dt):
     """btVehicleRL's tyre impulses from the start-of-tick velocity with LAST tick's steering angle, engine, brake
     and friction factors (Bullet's vehicle applies a wheel set-up one tick late)."""
@@ -420,7 +420,7 @@ def _friction_impulses(p, R, frame, v0, w0, inv_i, is_front, wheels, car, fric_i
             fric_impulse[k, j] = (f_dir[j] * long_amount + axle[j] * lat_amount) * (C.CAR_MASS / 3.0) * dt
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _wheel_axle(is_front, fwd, right, cos_a, sin_a, out):
     """A wheel's axle: the car's right, turned by the steering angle on the front wheels."""
     if is_front:
@@ -430,7 +430,7 @@ def _wheel_axle(is_front, fwd, right, cos_a, sin_a, out):
         out[:] = right
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_world, wheels, car, v, force_dv,
                    scratch, dt):
     """RocketSim's ``_UpdateWheels``: this tick's handbrake, engine and brake, steering angle and tyre friction
@@ -504,7 +504,7 @@ def _update_wheels(frame, v0, w0, p, c, is_front, three_wheel, num_contact, num_
     return v_fwd
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _mean_normal(wheels):
     """The normalised mean of the contact normals of the wheels in contact (btVehicleRL's upwards direction)."""
     hit, _, _, normal, _ = wheels
@@ -516,7 +516,7 @@ def _mean_normal(wheels):
     return n_avg
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _update_air_torque(R, frame, c, air_control_allowed, car, v, w, force_dv, dt):
     """RocketSim's ``_UpdateAirTorque``, with fewer than 3 wheels down: a flip's torque while it lasts (a flip ends
     once its time reaches 0.65 s at the start of a tick; pulling against it scales its pitch by 1 - |pitch|), air
@@ -554,7 +554,7 @@ def _update_air_torque(R, frame, c, air_control_allowed, car, v, w, force_dv, dt
         force_dv += frame.fwd * (C.THROTTLE_AIR_ACCEL * c[0] * dt)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _update_jump(on_ground, jump, jump_pressed, up, m, car, v, force_dv, dt):
     """RocketSim's ``_UpdateJump``: an impulse on the press, then a hold force for 0.025 to 0.2 s. The jump's
     time counts on after the jump until the car lands (has_jumped is cleared then, unless the jump is younger than
@@ -581,7 +581,7 @@ def _update_jump(on_ground, jump, jump_pressed, up, m, car, v, force_dv, dt):
         car[CS_JUMP_TIME] = _tick(car[CS_JUMP_TIME], dt)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _update_auto_flip(jump_pressed, frame, car, v, w, dt):
     """RocketSim's ``_UpdateAutoFlip``: jump while lying on the roof rights the car."""
     fwd, right, up, _ = frame
@@ -601,7 +601,7 @@ def _update_auto_flip(jump_pressed, frame, car, v, w, dt):
             car[CS_AUTOFLIP_TIMER] -= dt
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, car, v, force_dv, dt):
     """RocketSim's ``_UpdateDoubleJumpOrFlip``: landing restores both and clears the flip's time; in the air a new
     press within 1.25 s of the jump is a flip (|pitch| + |yaw| + |roll| past the dodge deadzone) or a double
@@ -636,7 +636,7 @@ def _update_double_jump_or_flip(on_ground, jump_pressed, up, fwd, v_fwd, c, m, c
         car[CS_FLIP_TIME] = _tick(car[CS_FLIP_TIME], dt)  # counts on for the pitch lock after the flip
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _update_auto_roll(frame, num_contact, wheels, car, v, w, dt):
     """RocketSim's ``_UpdateAutoRoll``: driving with some wheels (or the body) on a surface turns the car onto it."""
     fwd, right, _, _ = frame
@@ -654,7 +654,7 @@ def _update_auto_roll(frame, num_contact, wheels, car, v, w, dt):
     w += (torque_fwd + torque_right) * (C.AUTOROLL_TORQUE * dt)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _apply_wheel_impulses(p, R, down, inv_i, wheels, susp_impulse, fric_impulse, fric_rel, v, w, scratch):
     """The vehicle's second half: the suspension impulses at the contact points, then the tyre impulses."""
     hit, _, dist, _, hard = wheels
@@ -669,7 +669,7 @@ def _apply_wheel_impulses(p, R, down, inv_i, wheels, susp_impulse, fric_impulse,
             _apply_impulse(R, inv_i, v, w, fric_rel[k], fric_impulse[k])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _update_boost(boost_btn, on_ground, fwd, m, car, v, dt):
     """RocketSim's ``_UpdateBoost``: once started, boosting lasts at least 0.1 s while boost remains; an empty tank
     stops it and clears its timer at once."""
@@ -688,7 +688,7 @@ def _update_boost(boost_btn, on_ground, fwd, m, car, v, dt):
     car[CS_IS_BOOSTING] = 1.0 if boosting else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
     """A dodge: its direction and torque from the stick, its impulse in the horizontal plane (RocketSim)."""
     car[CS_HAS_FLIPPED] = 1.0
@@ -728,7 +728,7 @@ def _start_flip(car, v, fwd, v_fwd, pitch_in, yaw_in, roll_in):
     v += fh * imp_x + rh * imp_y
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _gyroscopic_step(w, R, inertia, h, out):
     """The angular-velocity change Bullet's implicit gyroscopic term gives a body turning at ``w`` over ``h``
     (``btRigidBody::computeGyroscopicImpulseImplicit_Body``: one Newton step of Euler's equations in body axes)."""
@@ -746,7 +746,7 @@ def _gyroscopic_step(w, R, inertia, h, out):
     out[:] = mat_vec(R, wb) - w
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def cancel_gyroscopic(ang_vel, rot, inv_inertia, writable, dt, out):
     """The angular velocities to hand PyBullet so that, after the gyroscopic step it adds to every rigid body
     (and cannot be switched off from Python), each car turns at ``ang_vel``: RocketSim's cars have no gyroscopic
@@ -764,7 +764,7 @@ def cancel_gyroscopic(ang_vel, rot, inv_inertia, writable, dt, out):
                 out[i, j] = ang_vel[i, j] - step[j]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def car_post_tick(vel, ang_vel, active, cs, dt):
     """Speed caps, the supersonic state and demolition timers, after the rigid-body step.
 
@@ -798,7 +798,7 @@ def car_post_tick(vel, ang_vel, active, cs, dt):
     return respawn_due
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def boost_pad_tick(car_pos, car_arena, active, cs, pad_pos, pad_is_big, pad_timer, picked, gained, mut, dt):
     """Count pad cooldowns down and let cars pick up active pads, in the arenas with pads on (``mut``);
     ``picked[i]`` gets the pad index or -1 and ``gained[i]`` the boost it added.

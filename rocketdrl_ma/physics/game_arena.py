@@ -126,7 +126,7 @@ MESH_MAX_EDGE = 500.0   # longest edge of the flat mesh parts (uu)
 
 
 # ================================================================= the field
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _floor_fillet(piece, ax, t):
     """The floor fillet's radius at the outline point of ``piece`` (0 side, 1 side rounding, 2 corner,
     3 corner rounding, 4 back) at parameter t (the rounding's angle share, or |x| on the back wall)."""
@@ -137,7 +137,7 @@ def _floor_fillet(piece, ax, t):
     return np.interp(ax, BACK_TAPER_X, BACK_TAPER_R)  # 160 tapering to 96 beside the posts
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _outline(ax, ay):
     """Signed distance from the folded point (|x|, |y|) to the rounded octagon (positive outside), the outward
     unit normal (folded) of its nearest point, and that point's piece and parameter (see ``_floor_fillet``)."""
@@ -172,7 +172,7 @@ def _outline(ax, ay):
     return best, nx, ny, piece, 0.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _inside_others(ax, ay):
     """Inside distance to the flat walls (a point in a rounding's wedge may still be nearer a wall inside)."""
     d = _FAR
@@ -185,7 +185,7 @@ def _inside_others(ax, ay):
     return d
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _polygon_fillet(a, b, r):
     """Inside distance in a fillet's corner (a from the wall, b from the floor or ceiling, both < r) to the wall,
     the floor and the fillet's chords (a convex polygon: the nearest of their lines inside it), and its gradient
@@ -202,7 +202,7 @@ def _polygon_fillet(a, b, r):
     return d, ga, gb
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _field(x, y, z):
     """Signed distance to the field (positive inside) and its unit gradient (into the field)."""
     sx = 1.0 if x >= 0.0 else -1.0
@@ -226,7 +226,7 @@ def _field(x, y, z):
 
 
 # ================================================================= the goals
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def _round_join(a, ga, b, gb, r):
     """Inside distance of the intersection of two sets (inside distances a, b and their gradients) with the edge
     between them rounded by r."""
@@ -240,7 +240,7 @@ def _round_join(a, ga, b, gb, r):
     return b, gb[0], gb[1], gb[2]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _net_section(ay, z):
     """Inside distance of the net's y-z section (folded |y|) and its gradient (gy, gz): the floor (flat, then
     rising), the roof (flat, then sloping) and, behind the back's axis, the half cylinder."""
@@ -263,7 +263,7 @@ def _net_section(ay, z):
     return d, gy, gz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _net(x, y, z):
     """Signed distance to the net on y's side (positive inside) and its gradient."""
     sx = 1.0 if x >= 0.0 else -1.0
@@ -276,7 +276,7 @@ def _net(x, y, z):
     return d, nx, ny, nz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _mouth(x, y, z):
     """Signed distance to the goal mouth on y's side (the opening in the back wall with its bevels, from inside
     the field to where the bevels meet the net) and its gradient."""
@@ -306,7 +306,7 @@ def _mouth(x, y, z):
     return d, nx, ny, nz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _post_foot(x, y, z):
     """Signed distance to the space round the foot of the post on (x, y)'s side (positive inside) and its
     gradient: the post's floor fillet revolved round its vertical edge at (MOUTH_W, back_y + BEVEL), where the
@@ -338,7 +338,7 @@ def _post_foot(x, y, z):
     return d, gx, gy, gz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def game_arena_sdf(x, y, z):
     """(d, nx, ny, nz): signed distance in uu (positive in the playable space) and the unit normal into it."""
     d, nx, ny, nz = _field(x, y, z)
@@ -355,7 +355,7 @@ def game_arena_sdf(x, y, z):
     return d, nx, ny, nz
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _sdf_many(points):
     out = np.empty(points.shape[0])
     for i in range(points.shape[0]):
@@ -369,7 +369,7 @@ def game_arena_sdf_many(points: np.ndarray) -> np.ndarray:
 
 
 # ================================================================= contacts
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _piece(k, x, y, z):
     if k == 0:
         return _field(x, y, z)
@@ -380,7 +380,7 @@ def _piece(k, x, y, z):
     return _post_foot(x, y, z)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _on_surface(qx, qy, qz, own):
     """Whether a surface point of piece ``own`` (0 field, 1 net, 2 mouth, 3 post foot; -1 an edge) lies inside no
     other piece."""
@@ -390,7 +390,7 @@ def _on_surface(qx, qy, qz, own):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _add(out, n, d, nx, ny, nz):
     """Row n of ``out`` = (d, normal) unless the same contact is there already. Returns the count."""
     for r in range(n):
@@ -402,7 +402,7 @@ def _add(out, n, d, nx, ny, nz):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _add_point(out, n, x, y, z, qx, qy, qz, reach):
     """The surface point q (an edge's or a bevel's nearest point) as a contact, the normal from q to the centre."""
     dx, dy, dz = x - qx, y - qy, z - qz
@@ -412,7 +412,7 @@ def _add_point(out, n, x, y, z, qx, qy, qz, reach):
     return _add(out, n, d, dx / d, dy / d, dz / d)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _in_a_goal_piece(qx, qy, qz):
     """Whether a point of the field's surface lies inside a goal piece (the opening cut into the back wall)."""
     if abs(qy) <= PIECE_START_Y:
@@ -420,7 +420,7 @@ def _in_a_goal_piece(qx, qy, qz):
     return _net(qx, qy, qz)[0] > 1e-3 or _mouth(qx, qy, qz)[0] > 1e-3 or _post_foot(qx, qy, qz)[0] > 1e-3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _add_field_point(out, n, x, y, z, qx, qy, qz, reach):
     """A point q of the field's surface as a contact (normal from q to the centre) if within reach and real."""
     dx, dy, dz = x - qx, y - qy, z - qz
@@ -430,7 +430,7 @@ def _add_field_point(out, n, x, y, z, qx, qy, qz, reach):
     return _add(out, n, d, dx / d, dy / d, dz / d)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _fillet_contacts(out, n, a, b, r, wall_is_a_plane, wx, wy, zs, reach):
     """The faces and edges of one fillet's polygon within reach of a centre at (a from the wall, b from the floor
     or ceiling), as Bullet's sphere-triangle test with RocketSim's internal-edge adjustment gives them: a chord's
@@ -463,7 +463,7 @@ def _fillet_contacts(out, n, a, b, r, wall_is_a_plane, wx, wy, zs, reach):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _field_contacts(x, y, z, reach, out, n):
     """The field's faces within reach, as a triangle mesh plus RocketSim's planes gives them (each face its own
     nearest point, hidden or not): the floor, ceiling and side-wall planes, each chord of the fillets' polygons,
@@ -500,7 +500,7 @@ def _field_contacts(x, y, z, reach, out, n):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def game_surface_contacts(x, y, z, reach, out):
     """Where a sphere at (x, y, z) reaching ``reach`` uu meets the game arena: rows (distance, nx, ny, nz) of
     ``out`` (normals into the arena), one per surface it reaches. Returns the number of rows.
@@ -538,7 +538,7 @@ def game_surface_contacts(x, y, z, reach, out):
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _frame_edge(out, n, du, dv, lo, hi, ux, uy, uz, vx, vy, vz, reach):
     """An edge of the goal frame seen from a centre at (du, dv) from it in the frame's section, as Bullet with
     RocketSim's internal-edge adjustment gives it: the direction to the centre, clamped between the normals of the
@@ -556,7 +556,7 @@ def _frame_edge(out, n, du, dv, lo, hi, ux, uy, uz, vx, vy, vz, reach):
 
 
 # ================================================================= ray casts
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def game_arena_raycast(ox, oy, oz, dx, dy, dz, max_len):
     """First surface hit of the unit ray (dx, dy, dz) from (ox, oy, oz) within max_len uu: (hit, t, nx, ny, nz),
     the normal pointing into the interior. Sphere tracing: the union's distance never exceeds the distance to the

@@ -51,7 +51,7 @@ _BUMP_AIR = np.array(C.BUMP_VEL_CURVE_AIR)
 _BUMP_UP = np.array(C.BUMP_UPWARD_VEL_CURVE)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def post_tick_kernels(car_pos, car_vel, car_ang_vel, car_arena, car_active, cs, pad_timer, pad_picked, pad_gained,
                       mut, dt):
     """The compiled after-step work of one tick in one call: ``car_post_tick`` and ``boost_pad_tick``.

@@ -20,7 +20,7 @@ _MIN_MARCH_STEP = 1.0  # uu: the fallback march's smallest step (its worst-case 
 _MAX_MARCH_STEPS = 8192
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, nogil=True, inline="always")
 def arena_ray_distances(shape, origin, dirs, max_len):
     """Distance along each unit ray in ``dirs`` (n, 3) from ``origin`` to the surface of the arena of ``shape``
     (``arena_shape``'s integer, a literal); inf if none within ``max_len``. Uses the shape's ray cast; when it
@@ -47,7 +47,7 @@ def arena_ray_distances(shape, origin, dirs, max_len):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _ray_sphere(ox, oy, oz, dx, dy, dz, center, radius):
     """Entry distance of a unit ray into a sphere (0 if the origin is inside; inf if missed)."""
     cx, cy, cz = ox - center[0], oy - center[1], oz - center[2]
@@ -62,7 +62,7 @@ def _ray_sphere(ox, oy, oz, dx, dy, dz, center, radius):
     return t if t >= 0.0 else np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _ray_box(ox, oy, oz, dx, dy, dz, center, axes, half):
     """Entry distance of a unit ray into an oriented box (slab test; 0 if the origin is inside, inf if missed).
     ``axes`` holds the box's unit axes as columns, ``half`` its half extents along them."""
@@ -82,7 +82,7 @@ def _ray_box(ox, oy, oz, dx, dy, dz, center, axes, half):
     return np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ray_hits(shape, origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
     """Per unit ray in ``dirs`` (n, 3) from ``origin``: the nearest hit distance within ``reach`` (inf if
     none) and its class (index into ``RAY_CLASSES``; -1 if none): the ball sphere, oriented boxes of class
@@ -108,13 +108,13 @@ def ray_hits(shape, origin, dirs, ball_pos, ball_radius, box_centers, box_axes, 
     return nearest, cls
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ray_hits_classic(origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
     """``ray_hits`` in the "classic" arena."""
     return ray_hits(CLASSIC, origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def ray_hits_game(origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach):
     """``ray_hits`` in the "game" arena."""
     return ray_hits(GAME, origin, dirs, ball_pos, ball_radius, box_centers, box_axes, box_half, box_class, reach)
