@@ -29,6 +29,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import textwrap
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,8 +145,11 @@ def cell(kind: str, config: str, workers: int, iterations: int, pythonpath: Path
          profile: Path | None = None) -> dict:
     with tempfile.TemporaryDirectory() as out:
         env = {**os.environ, "PYTHONPATH": str(pythonpath), "RL_WARNINGS": "0"}
+        if pythonpath != ROOT:  # the baseline's kernels compile once for the whole run, not once per cell
+            env["NUMBA_CACHE_DIR"] = str(pythonpath / "numba_cache")
         script = Path(out) / "cell.py"  # a file, not -c: a profile names its process by the command line
-        script.write_text(CELL % MIN_STEPS)
+        # under a main guard: the rollout workers are spawned, and a spawned process imports the main script again
+        script.write_text('if __name__ == "__main__":\n' + textwrap.indent(CELL % MIN_STEPS, "    "))
         args = [sys.executable, str(script), kind, config, str(workers), str(iterations), out, *([ray] if ray else [])]
         proc = subprocess.run(_command(args, profile), cwd=pythonpath, env=env, capture_output=True, text=True)
         if proc.returncode != 0:
