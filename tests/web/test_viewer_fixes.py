@@ -18,9 +18,9 @@ from web_helpers import REPO, Procs, cli, launch_chromium, write_replay
 
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("test_page")]
 VIEWPORT = {"width": 1280, "height": 720}
-#: 2v2 ball-chasers, seed 0: a goal near the end of the 8 s clock or in overtime
-GOAL_MATCH = ("create", "matches/2v2.yaml", "--seed", "0", "--mode", "realtime", "--ready-timeout", "8",
-              "--set", "clock_s=8", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=2")
+#: 2v2 ball-chasers, seed 1: a goal 15.5 s into the 20 s clock
+GOAL_MATCH = ("create", "matches/2v2.yaml", "--seed", "1", "--mode", "realtime", "--ready-timeout", "8",
+              "--set", "clock_s=20", "--set", "kickoff_countdown_s=0", "--set", "overtime_limit_s=2")
 LONG_MATCH = ("create", "matches/1v1.yaml", "--mode", "realtime", "--ready-timeout", "1", "--set", "clock_s=120")
 
 
