@@ -5,17 +5,20 @@ SwiftShader when there is no GPU) at 1280x720 creates a real-time 4v4 against sc
 blue_0. Each sample: with the car on its wheels, Playwright presses the jump key; the page notes the key
 event's time and, at every animation frame, whether the car it draws has left the ground (5 uu above where
 it stood). The latency is the time from the key event to the first frame that draws the car off the ground:
-the page's websocket, the page server's seat, Zenoh, the server's next 120 Hz tick, the state published at
-the next decision, Zenoh, the websocket and the page's live lag (the view plays 0.12 s behind the newest
-state, for smooth motion). Between samples the car lands and settles. fps: the page's frames per second
-over the 2 s before each sample, the 4v4 live the whole time.
+the page's websocket, the page server's seat, Zenoh, the server's next 120 Hz tick, the physics' first ticks of
+the jump, the next state the real-time match publishes (60 a second), Zenoh, the page server (which sends a
+player's page each state as it arrives, up to 60 a second), the websocket and the page's next frame (a player's
+own match is drawn at its newest state, with no jitter buffer). Between samples the car lands and settles. fps:
+the page's frames per second over the 2 s before each sample, the 4v4 live the whole time. The machine's load
+average is printed before and after: figures taken beside other jobs are "loaded" figures.
 
-Run from the repo root (after ``make web-deps``): ``nice -n 10 .venv/bin/python benchmarks/web_latency.py``
-(``--samples N``, default 60).
+Run from the repo root (after ``make web-deps``; ``rocketdrl-ma warmup`` first, or the first match compiles
+its kernels): ``nice -n 10 .venv/bin/python benchmarks/web_latency.py`` (``--samples N``, default 60).
 """
 from __future__ import annotations
 
 import argparse
+import os
 import shutil
 import sys
 import tempfile
@@ -60,6 +63,7 @@ def main() -> None:
     args = parser.parse_args()
     from playwright.sync_api import sync_playwright
 
+    load_before = os.getloadavg()
     procs = Procs()
     with tempfile.TemporaryDirectory() as tmp:
         try:
@@ -76,7 +80,7 @@ def main() -> None:
                 page.select_option("#play-opponent", "scripted:ball_chaser")
                 page.click("#play-create")
                 page.wait_for_function("window.__view.seat() !== null && window.__view.stats().frames > 10",
-                                       timeout=120_000)
+                                       timeout=300_000)
                 index = page.evaluate("window.__view.roster().agents").index(page.evaluate("window.__view.seat().slot"))
                 latencies_ms, fps_readings, missed, started = [], [], 0, time.monotonic()
                 while len(latencies_ms) + missed < args.samples:
@@ -99,6 +103,8 @@ def main() -> None:
                 browser.close()
         finally:
             procs.stop_all()
+    print("load average (1, 5, 15 min) before: " + " ".join(f"{v:.2f}" for v in load_before)
+          + ", after: " + " ".join(f"{v:.2f}" for v in os.getloadavg()) + f" on {os.cpu_count()} CPUs")
     values = np.array(latencies_ms)
     p50, p95, p99 = np.percentile(values, [50, 95, 99])
     print(f"key press to the car's response drawn, live 4v4 at {VIEWPORT['width']}x{VIEWPORT['height']}, "

@@ -49,6 +49,10 @@ log = logging.getLogger(__name__)
 STATIC_DIR = Path(__file__).parent / "static"
 PACKAGED_VENDOR_DIR = Path(__file__).parent / "vendor"  # in a wheel: the page's npm files, node_modules' layout
 MAX_STATES_PER_S = 30.0
+#: a page that plays gets its match's states up to this rate (real-time matches publish 60 a second)
+PLAYER_STATES_PER_S = 60.0
+#: with nothing arriving, how often a followed source is looked at anyway (the first-state hint, a silent server)
+IDLE_LOOK_S = 0.25
 MAX_REQUEST_BYTES = 64 * 1024
 #: a followed source with no state after this long gets a hint on the page (kernels compiling, bots joining)
 FIRST_STATE_HINT_S = 2.0
@@ -303,7 +307,8 @@ class PageServer:
                                                     "status": join.status, "decision_ticks": join.decision_ticks}))
                         feed = await self._get_feed()
                         follower = await asyncio.to_thread(feed.follow, "match", join.match)
-                        follow = (asyncio.create_task(self._pump(ws, follower, "match", join.match)), follower)
+                        follow = (asyncio.create_task(self._pump(ws, follower, "match", join.match,
+                                                                 PLAYER_STATES_PER_S)), follower)
                     elif op == "leave":
                         await ws.send(pack_message({"type": "seat", "match": None, "slot": None}))
                     elif op == "list":
@@ -328,10 +333,18 @@ class PageServer:
                 seat.leave()
                 self._seats.discard(seat)
 
-    async def _pump(self, ws, follower, kind: str, source_id: str) -> None:
-        """Send the newest state at most ``max_rate`` times a second (never two within one period), with
-        every event since the last one."""
-        period = 1.0 / self.max_rate
+    async def _pump(self, ws, follower, kind: str, source_id: str, max_rate: float | None = None) -> None:
+        """Send the newest state as soon as it arrives, at most ``max_rate`` (default: the page server's) times a
+        second (never two within one period), with every event since the last one."""
+        period = 1.0 / (max_rate or self.max_rate)
+        loop, arrived = asyncio.get_running_loop(), asyncio.Event()
+
+        def on_arrival() -> None:  # Zenoh's thread
+            try:
+                loop.call_soon_threadsafe(arrived.set)
+            except RuntimeError:  # the loop closed while a last sample came in
+                pass
+        follower.on_arrival = on_arrival
         cast_shown: dict | None = None
         agents: list[str] | None = None
         hint_at: float | None = time.monotonic() + FIRST_STATE_HINT_S  # None once a state came or the hint went
@@ -347,6 +360,7 @@ class PageServer:
                                                                                   "error")}}))
                 return
             while True:
+                arrived.clear()
                 update: FeedUpdate = follower.poll()
                 events += update.events
                 live, final = update.state, update.final
@@ -381,9 +395,12 @@ class PageServer:
                     events = []
                     if kind == "match":
                         return
-                # the next frame a whole period after this one; with nothing new, look again soon
-                wait = period - (time.monotonic() - last_sent) if live is not None else period / 4
-                await asyncio.sleep(max(0.0, wait))
+                if live is not None:  # the next frame a whole period after this one
+                    await asyncio.sleep(max(0.0, period - (time.monotonic() - last_sent)))
+                try:
+                    await asyncio.wait_for(arrived.wait(), IDLE_LOOK_S)
+                except TimeoutError:
+                    pass
         except asyncio.CancelledError:
             raise
         except Exception as e:  # a closed websocket, or a bug: the follower must go either way
