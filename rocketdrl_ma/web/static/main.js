@@ -68,7 +68,14 @@ function onMessage(data) {
       showFinalStats(message.summary);
       setTitle();
       break;
-    case "replay": openReplay(message); break;
+    case "replay":
+      openReplay(message);
+      if (message.league) {
+        showNotice(message.league.same_score === false ? "this replay's score differs from the stored result" : null,
+          false);
+        setTitle(`league match ${message.league.key} · played again from its seed`);
+      }
+      break;
     case "seat": onSeat(message); break;
     case "ack": onAck(message.n); break;
     case "error": console.warn(`page server: ${message.error}`); setTitle(`error: ${message.error}`); break;
@@ -146,11 +153,24 @@ function openReplayById(id) {
   if (lastList) showList(lastList);
 }
 
+// A league's stored match (the league page links here): the page server plays it again from its seed.
+function openLeagueReplay(key) {
+  if (seat) leaveSeat();
+  showFinalStats(null);
+  showNotice(`playing league match ${key} again from its seed…`, false);
+  source = { kind: "league", id: key };
+  status = null;
+  setTitle(`loading league match ${key}…`);
+  send({ op: "league_replay", key });
+}
+
 function openFromHash() {
-  const m = /^#(match|train|replay)=(.+)$/.exec(location.hash);
+  const m = /^#(match|train|replay|league)=(.+)$/.exec(location.hash);
   if (!m) return;
   const id = decodeURIComponent(m[2]);
-  if (m[1] === "replay") openReplayById(id); else watch(m[1], id);
+  if (m[1] === "replay") openReplayById(id);
+  else if (m[1] === "league") openLeagueReplay(id);
+  else watch(m[1], id);
 }
 
 // ------------------------------------------------------------------------------------------- play
