@@ -123,7 +123,10 @@ export class Timeline {
   holdLive() { this.follow = false; this.replayUntil = null; }
 
   // ... and follow the newest frame again.
-  goLive() { this.follow = true; this.playing = true; this.speed = 1; this.replayUntil = null; }
+  goLive() {
+    this.follow = true; this.playing = true; this.speed = 1; this.replayUntil = null;
+    this.playhead = Math.max(this.firstTick, this.lastTick - this.lagS() * (this.ticksPerS || this.tickRate));
+  }
 
   // Live: play the buffer's [fromTick, untilTick] again at normal speed, then follow the newest frame again.
   instantReplay(fromTick, untilTick) {
