@@ -39,15 +39,18 @@ RISE_UU = 5.0
 #: the page-side half of a sample: remember when the key went down, then find the first frame drawing the car up
 WATCH_RESPONSE = """([index, riseUu]) => new Promise((resolve) => {
   const standZ = window.__view.carStates()[index][2];
-  let pressedAt = null;
+  let pressedAt = null, arrivedAt = null;
   const onKey = (e) => { if (e.code === "Space" && pressedAt === null) pressedAt = e.timeStamp; };
   window.addEventListener("keydown", onKey);
   const giveUp = performance.now() + 3000;
   const check = (frameTime) => {
-    const car = window.__view.carStates()[index];
+    const car = window.__view.carStates()[index], newest = window.__view.newestCar(index);
+    if (pressedAt !== null && arrivedAt === null && newest && newest[2] > standZ + riseUu) {
+      arrivedAt = window.__view.newestArrivalMs();
+    }
     if (pressedAt !== null && car && car[2] > standZ + riseUu) {
       window.removeEventListener("keydown", onKey);
-      resolve(frameTime - pressedAt);
+      resolve([frameTime - pressedAt, (arrivedAt ?? frameTime) - pressedAt]);
     } else if (performance.now() > giveUp) {
       window.removeEventListener("keydown", onKey);
       resolve(null);
@@ -82,7 +85,7 @@ def main() -> None:
                 page.wait_for_function("window.__view.seat() !== null && window.__view.stats().frames > 10",
                                        timeout=300_000)
                 index = page.evaluate("window.__view.roster().agents").index(page.evaluate("window.__view.seat().slot"))
-                latencies_ms, fps_readings, missed, started = [], [], 0, time.monotonic()
+                latencies_ms, arrivals_ms, fps_readings, missed, started = [], [], [], 0, time.monotonic()
                 while len(latencies_ms) + missed < args.samples:
                     page.wait_for_function(f"(window.__view.carStates()[{index}] || [])[8] & {FLAG_ON_GROUND}",
                                            timeout=30_000)
@@ -97,9 +100,11 @@ def main() -> None:
                     if latency is None:
                         missed += 1
                     else:
-                        latencies_ms.append(latency)
+                        latencies_ms.append(latency[0])
+                        arrivals_ms.append(latency[1])
                     time.sleep(1.2)  # lands
                 stats = page.evaluate("window.__view.stats()")
+                acks_ms = page.evaluate("window.__view.inputAcksMs()")
                 browser.close()
         finally:
             procs.stop_all()
@@ -110,6 +115,12 @@ def main() -> None:
     print(f"key press to the car's response drawn, live 4v4 at {VIEWPORT['width']}x{VIEWPORT['height']}, "
           f"{len(values)} samples ({missed} without a response in 3 s) over {time.monotonic() - started:.0f} s: "
           f"p50 {p50:.0f} ms, p95 {p95:.0f} ms, p99 {p99:.0f} ms, max {values.max():.0f} ms")
+    arrived = np.array(arrivals_ms)
+    print("where it goes (p50 / p95): key to the page server's ack "
+          f"{np.percentile(acks_ms, 50):.0f} / {np.percentile(acks_ms, 95):.0f} ms (round trip); key to the first "
+          f"state showing the jump arriving {np.percentile(arrived, 50):.0f} / {np.percentile(arrived, 95):.0f} ms; "
+          f"that state's arrival to the frame drawing it {np.percentile(values - arrived, 50):.0f} / "
+          f"{np.percentile(values - arrived, 95):.0f} ms")
     print(f"page: median {np.median(fps_readings):.1f} fps (min {min(fps_readings):.1f}; each over the 2 s before a "
           f"sample), {stats['statesPerS']:.1f} states/s, page loop {stats['loopMs']:.2f} ms/frame")
 

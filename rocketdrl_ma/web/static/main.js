@@ -634,6 +634,11 @@ window.__view = {
   // each car as drawn: [x, y, z, qx, qy, qz, qw, boost, flags], null for a car not in the game
   carStates: () => (shown ? shown.a.map((c) => (c ? [...c] : null)) : null),
   seat: () => (seat ? { ...seat } : null),
+  // the newest state received (not yet drawn, perhaps): its car `i`, and when it arrived (performance.now, ms)
+  newestCar: (i) => (timeline.frames.length ? timeline.frames[timeline.frames.length - 1].a[i] : null),
+  newestArrivalMs: () => timeline.lastArrival * 1000,
+  // the last inputs' round trips to the page server (ms)
+  inputAcksMs: () => [...ackMs],
   inputsSent: () => inputSeq,
   ballCam: () => view.ballCam,
   roster: () => roster,
