@@ -122,7 +122,8 @@ def main() -> None:
           f"that state's arrival to the frame drawing it {np.percentile(values - arrived, 50):.0f} / "
           f"{np.percentile(values - arrived, 95):.0f} ms")
     print(f"page: median {np.median(fps_readings):.1f} fps (min {min(fps_readings):.1f}; each over the 2 s before a "
-          f"sample), {stats['statesPerS']:.1f} states/s, page loop {stats['loopMs']:.2f} ms/frame")
+          f"sample), {stats['statesPerS']:.1f} states/s, page loop {stats['loopMs']:.2f} ms/frame, drawing at "
+          f"pixel ratio {stats['pixelRatio']:.2f} at the end (the page draws fewer pixels below 28 fps)")
 
 
 if __name__ == "__main__":

@@ -604,6 +604,10 @@ function loop() {
   stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
   stats.renders.push(now);
   while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
+  if (now - (stats.adaptedAt || 0) > 2) { // every 2 s, from the frame rate of those 2 s
+    stats.adaptedAt = now;
+    if (stats.renders.length > 2 && now - stats.renders[0] > 1.9) view.adaptResolution(rate(stats.renders));
+  }
   while (stats.arrivals.length && stats.arrivals[0] < now - 2) stats.arrivals.shift();
   requestAnimationFrame(loop);
 }
@@ -643,7 +647,8 @@ window.__view = {
   ballCam: () => view.ballCam,
   roster: () => roster,
   stats: () => ({ fps: rate(stats.renders), statesPerS: rate(stats.arrivals), frames: stats.frames,
-    bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs }),
+    bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs,
+    pixelRatio: view.renderer.getPixelRatio() }),
 };
 
 fetch("/arena.json").then((r) => r.json()).then((arena) => {

@@ -15,23 +15,30 @@ function toSceneQuaternion(x, y, z, w) { return [-y, -x, w, z]; }
 
 export const TEAM_COLORS = [0x2f7bff, 0xff8a1c];
 export const TRAIL_POINTS = 24;
+// Below MIN_FPS the view draws fewer pixels (down to MIN_PIXEL_RATIO, stretched to the canvas), above
+// RECOVER_FPS it draws more again: a slow (software) renderer stays smooth at the cost of sharpness.
+const MIN_FPS = 28, RECOVER_FPS = 50, MIN_PIXEL_RATIO = 0.6, PIXEL_STEP = 0.85;
 // how far off the view's axis the chased car may be, as a fraction of half the vertical field of view
 const CHASE_MAX_OFF_AXIS = 0.7;
 
 // The view's lights: a sky/ground hemisphere and a sun (directions in the drawn, mirrored scene).
-const SKY = 0xdde6ff, GROUND = 0x203020, HEMI_INTENSITY = 1.6, SUN_INTENSITY = 1.4;
+const SKY = 0xdde6ff, GROUND = 0x203020, HEMI_INTENSITY = 1.6, SUN_INTENSITY = 1.4, BACKGROUND = 0x0d1117;
 const SUN_AT = new THREE.Vector3(-3000, -2000, 8000);
 
-// Those lights' Lambert shading of `color`, worked out once per vertex: the large translucent surfaces (walls,
-// goals) are drawn unlit with it, since a software renderer would shade each of their pixels every frame.
-function bakeLight(geometry, color) {
+// Those lights' Lambert shading of `color`, worked out once per vertex: the large surfaces (walls, goals) are
+// drawn unlit with it, since a software renderer would shade each of their pixels every frame. With `over`, the
+// colour is blended over the background colour `over.color` as `over.opacity` would draw it (in sRGB, as the
+// canvas blends): an opaque wall that looks translucent wherever only the background is behind it.
+function bakeLight(geometry, color, over = null) {
   const normal = geometry.attributes.normal, base = new THREE.Color(color), sun = SUN_AT.clone().normalize();
   const sky = new THREE.Color(SKY), ground = new THREE.Color(GROUND), c = new THREE.Color();
   const out = new Float32Array(normal.count * 3);
+  const back = over ? new THREE.Color(over.color).convertLinearToSRGB() : null, mixed = new THREE.Color();
   for (let i = 0; i < normal.count; i++) {
     const nx = normal.getX(i), ny = normal.getY(i), nz = normal.getZ(i);
     const direct = (SUN_INTENSITY / Math.PI) * Math.max(0, nx * sun.x + ny * sun.y + nz * sun.z);
     c.copy(ground).lerp(sky, 0.5 * nz + 0.5).multiplyScalar(HEMI_INTENSITY / Math.PI).addScalar(direct).multiply(base);
+    if (over) c.copy(mixed.copy(back).lerp(c.convertLinearToSRGB(), over.opacity)).convertSRGBToLinear();
     out[3 * i] = c.r; out[3 * i + 1] = c.g; out[3 * i + 2] = c.b;
   }
   geometry.setAttribute("color", new THREE.BufferAttribute(out, 3));
@@ -63,9 +70,11 @@ function arenaMeshes(arena) {
   const out = new THREE.Group();
   // the floor is flat: one colour, no per-pixel lighting (the largest area on screen; software renderers care)
   out.add(new THREE.Mesh(make(groups.floor), new THREE.MeshBasicMaterial({ color: 0x2f5e3c })));
-  // Faces point into the field: from a camera outside it, the near walls and the ceiling are culled away.
-  out.add(new THREE.Mesh(bakeLight(make(groups.shell), 0x7d8fb3), new THREE.MeshBasicMaterial({
-    vertexColors: true, transparent: true, opacity: 0.28, depthWrite: false })));
+  // Faces point into the field: from a camera outside it, the near walls and the ceiling are culled away. Only the
+  // background is behind the walls seen, so they are drawn opaque in the colour a 28% translucent wall would show:
+  // no blending, and what is behind them is never drawn.
+  out.add(new THREE.Mesh(bakeLight(make(groups.shell), 0x7d8fb3, { color: BACKGROUND, opacity: 0.28 }),
+    new THREE.MeshBasicMaterial({ vertexColors: true })));
   for (const team of [0, 1]) {
     out.add(new THREE.Mesh(bakeLight(make(groups[`goal${team}`]), TEAM_COLORS[team]), new THREE.MeshBasicMaterial({
       vertexColors: true, transparent: true, opacity: 0.45, depthWrite: false, side: THREE.DoubleSide })));
@@ -173,9 +182,10 @@ export class View {
   constructor(canvas) {
     this.canvas = canvas;
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: false, powerPreference: "high-performance" });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 1.5));
+    this.maxPixelRatio = Math.min(window.devicePixelRatio || 1, 1.5);
+    this.renderer.setPixelRatio(this.maxPixelRatio);
     this.scene = new THREE.Scene();
-    this.scene.background = new THREE.Color(0x0d1117);
+    this.scene.background = new THREE.Color(BACKGROUND);
     this.scene.add(new THREE.HemisphereLight(SKY, GROUND, HEMI_INTENSITY));
     const sun = new THREE.DirectionalLight(0xffffff, SUN_INTENSITY);
     sun.position.copy(SUN_AT);
@@ -241,6 +251,15 @@ export class View {
   setCamera(mode, index) {
     this.cameraMode = mode;
     if (index !== undefined) this.chaseIndex = index;
+  }
+
+  // Fewer or more pixels for the frame rate `fps` the page measured over the last seconds.
+  adaptResolution(fps) {
+    const now = this.renderer.getPixelRatio();
+    let next = now;
+    if (fps < MIN_FPS) next = Math.max(MIN_PIXEL_RATIO, now * PIXEL_STEP);
+    else if (fps > RECOVER_FPS) next = Math.min(this.maxPixelRatio, now / PIXEL_STEP);
+    if (Math.abs(next - now) > 1e-3) this.renderer.setPixelRatio(next);
   }
 
   resize() {
