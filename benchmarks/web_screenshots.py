@@ -2,7 +2,8 @@
 
 A `rocketdrl-ma serve` on loopback and `rocketdrl-ma web --play --league` beside it: a live 4v4 (broadcast and chase
 cameras), a 4v4 replay top-down with its timeline, a 2v2 played from the keyboard against ball-chasers, the instant
-replay of a live 2v2's goal, and the league page of a tiny league of scripted bots played for it.
+replay of a live 2v2's goal, and the league page of a tiny league of scripted bots played for it. The pages are
+opened with ``?sharp`` (the full pixel ratio even when the software renderer draws slowly).
 
 Run from the repo root (after ``make web-deps`` and ``rocketdrl-ma warmup``):
 ``.venv/bin/python benchmarks/web_screenshots.py [--out docs/web]``.
@@ -73,17 +74,19 @@ def main() -> None:
             with sync_playwright() as playwright:
                 browser = launch_chromium(playwright)
                 procs.lobby(endpoint, "docs", *LIVE_4V4)
-                page = open_page(browser, url + "#match=final")
+                page = open_page(browser, url + "?sharp#match=final")
                 page.wait_for_function("window.__view.stats().frames > 200", timeout=300_000)
                 page.keyboard.press("1")
                 time.sleep(2)
+                page.keyboard.press("l")  # an instant replay, if a goal just came, skipped
+                time.sleep(0.5)
                 page.screenshot(path=str(out / "live-broadcast.png"))
                 page.keyboard.press("3")
                 time.sleep(2)
                 page.screenshot(path=str(out / "live-chase.png"))
                 page.close()
 
-                page = open_page(browser, url + "#replay=replays/final_4v4.npz")
+                page = open_page(browser, url + "?sharp#replay=replays/final_4v4.npz")
                 page.wait_for_function("window.__view.mode() === 'replay' && window.__view.roster() !== null")
                 page.click("#play")
                 page.eval_on_selector("#seek", "(el) => { el.value = Number(el.min) + 0.6 * (el.max - el.min); "
@@ -94,13 +97,13 @@ def main() -> None:
                 page.close()
 
                 procs.lobby(endpoint, "docs", *GOAL_2V2)
-                page = open_page(browser, url + "#match=goal")
+                page = open_page(browser, url + "?sharp#match=goal")
                 page.wait_for_function("window.__view.replaying()", timeout=120_000)
                 time.sleep(2.5)
                 page.screenshot(path=str(out / "live-instant-replay.png"))
                 page.close()
 
-                page = open_page(browser, url)
+                page = open_page(browser, url + "?sharp")
                 page.wait_for_selector("#play-panel:not([hidden])", timeout=20_000)
                 page.select_option("#play-config", "matches/2v2.yaml")
                 page.select_option("#play-opponent", "scripted:ball_chaser")

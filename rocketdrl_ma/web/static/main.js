@@ -7,6 +7,8 @@ import { TRAIL_POINTS, View } from "./scene.js";
 import { FLAG_DEMOED, Timeline } from "./timeline.js";
 
 const $ = (id) => document.getElementById(id);
+// `?sharp` in the page's address: always the full pixel ratio, however slowly it draws
+const SHARP = new URLSearchParams(location.search).has("sharp");
 const view = new View($("view"));
 const timeline = new Timeline();
 const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
@@ -604,7 +606,7 @@ function loop() {
   stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
   stats.renders.push(now);
   while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
-  if (now - (stats.adaptedAt || 0) > 2) { // every 2 s, from the frame rate of those 2 s
+  if (!SHARP && now - (stats.adaptedAt || 0) > 2) { // every 2 s, from the frame rate of those 2 s
     stats.adaptedAt = now;
     if (stats.renders.length > 2 && now - stats.renders[0] > 1.9) view.adaptResolution(rate(stats.renders));
   }
