@@ -4,7 +4,8 @@ A real `rocketdrl-ma serve` and `rocketdrl-ma web --play` on loopback; Debian's 
 SwiftShader when there is no GPU) at 1280x720 creates a real-time 4v4 against scripted ball-chasers and plays
 blue_0. Each sample: with the car on its wheels, Playwright presses the jump key; the page notes the key
 event's time and, at every animation frame, whether the car it draws has left the ground (5 uu above where
-it stood). The latency is the time from the key event to the first frame that draws the car off the ground:
+it stood). The latency is the time from the key event to the first frame that draws the car off the ground (read
+just after the page's own frame callback has issued the drawing):
 the page's websocket, the page server's seat, Zenoh, the server's next 120 Hz tick, the physics' first ticks of
 the jump, the next state the real-time match publishes (60 a second), Zenoh, the page server (which sends a
 player's page each state as it arrives, up to 60 a second), the websocket and the page's next frame (a player's
@@ -43,14 +44,15 @@ WATCH_RESPONSE = """([index, riseUu]) => new Promise((resolve) => {
   const onKey = (e) => { if (e.code === "Space" && pressedAt === null) pressedAt = e.timeStamp; };
   window.addEventListener("keydown", onKey);
   const giveUp = performance.now() + 3000;
-  const check = (frameTime) => {
+  const check = () => {
+    const drawnAt = performance.now(); // after the page's own frame callback, which drew (it was first in line)
     const car = window.__view.carStates()[index], newest = window.__view.newestCar(index);
     if (pressedAt !== null && arrivedAt === null && newest && newest[2] > standZ + riseUu) {
       arrivedAt = window.__view.newestArrivalMs();
     }
     if (pressedAt !== null && car && car[2] > standZ + riseUu) {
       window.removeEventListener("keydown", onKey);
-      resolve([frameTime - pressedAt, (arrivedAt ?? frameTime) - pressedAt]);
+      resolve([drawnAt - pressedAt, (arrivedAt ?? drawnAt) - pressedAt]);
     } else if (performance.now() > giveUp) {
       window.removeEventListener("keydown", onKey);
       resolve(null);
