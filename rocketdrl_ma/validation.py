@@ -186,8 +186,8 @@ def check_value(field: str, value: Any, annotation: Any) -> Any:
     bounds = next((m for m in marks if isinstance(m, Range)), Range())
     try:
         checked = _check_type(field, value, kind, bounds)
-    except ValueError:
-        if expect is None:
+    except ValueError as e:
+        if expect is None or not str(e).startswith(f"{field}: "):  # an item's own error names the item
             raise
         raise ValueError(f"{field}: expected {expect}, got {value!r}") from None
     for mark in marks:
