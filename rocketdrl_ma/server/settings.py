@@ -372,7 +372,7 @@ class ServerSettings:
     limits: Limits = field(default_factory=Limits)
     match_defaults: MatchOptions = field(default_factory=MatchOptions)
     matches: Annotated[tuple[dict, ...] | None, Expect("a list of match options"), Check(_listed)] = ()
-    max_finished_kept: int = 100
+    max_finished_kept: Count = 100
 
     @classmethod
     def from_dict(cls, d: dict) -> "ServerSettings":
