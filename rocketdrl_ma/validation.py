@@ -176,6 +176,14 @@ def load_dataclass(config_class: type[T], value: Any, section: str, prefix: str 
     return config
 
 
+def checked_fields(config: Any, prefix: str = "") -> dict[str, Any]:
+    """The field values of a dataclass made by its constructor (from Python, not a YAML), each checked against its
+    annotation as ``load_dataclass`` checks a YAML's, by field name."""
+    hints = _type_hints(type(config))
+    return {f.name: check_value(prefix + yaml_key(f), getattr(config, f.name), hints[f.name])
+            for f in dataclasses.fields(config)}
+
+
 def check_value(field: str, value: Any, annotation: Any) -> Any:
     """``value`` checked (and converted: lists to tuples, ints to floats) as ``annotation`` says; see the module
     docstring. A ValueError names ``field``."""
