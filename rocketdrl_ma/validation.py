@@ -156,7 +156,7 @@ def load_dataclass(config_class: type[T], value: Any, section: str, prefix: str 
         return value
     fields = dataclasses.fields(config_class)
     given = as_mapping(section, value, [yaml_key(f) for f in fields])
-    hints = _type_hints(config_class)
+    hints = field_types(config_class)
     values = {}
     for f in fields:
         key = yaml_key(f)
@@ -179,7 +179,7 @@ def load_dataclass(config_class: type[T], value: Any, section: str, prefix: str 
 def checked_fields(config: Any, prefix: str = "") -> dict[str, Any]:
     """The field values of a dataclass made by its constructor (from Python, not a YAML), each checked against its
     annotation as ``load_dataclass`` checks a YAML's, by field name."""
-    hints = _type_hints(type(config))
+    hints = field_types(type(config))
     return {f.name: check_value(prefix + yaml_key(f), getattr(config, f.name), hints[f.name])
             for f in dataclasses.fields(config)}
 
@@ -207,7 +207,8 @@ def check_value(field: str, value: Any, annotation: Any) -> Any:
 
 
 @functools.cache
-def _type_hints(config_class: type) -> dict[str, Any]:
+def field_types(config_class: type) -> dict[str, Any]:
+    """The annotations of a config dataclass's fields, ``Annotated`` marks kept, by field name."""
     return typing.get_type_hints(config_class, include_extras=True)
 
 
