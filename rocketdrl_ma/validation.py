@@ -50,26 +50,6 @@ def yaml_key(field: dataclasses.Field) -> str:
     return field.metadata.get("key", field.name)
 
 
-def section_values(section: str, value: Any, config_class: type) -> dict[str, Any]:
-    """The values of the dataclass ``config_class``'s fields (by field name) from the mapping ``value`` (keyed by
-    ``yaml_key``), defaults filled in. A non-mapping or an unknown key is a ValueError naming ``section`` and the
-    allowed keys; so is a missing key whose field has no default."""
-    fields = dataclasses.fields(config_class)
-    given = as_mapping(section, value, [yaml_key(f) for f in fields])
-    out = {}
-    for f in fields:
-        key = yaml_key(f)
-        if key in given:
-            out[f.name] = given[key]
-        elif f.default is not dataclasses.MISSING:
-            out[f.name] = f.default
-        elif f.default_factory is not dataclasses.MISSING:
-            out[f.name] = f.default_factory()
-        else:
-            raise ValueError(f"{section}: {key!r} is required")
-    return out
-
-
 def check_int(field: str, value: Any, minimum: int | None = None, maximum: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         raise ValueError(f"{field}: expected an int, got {value!r}")
@@ -132,7 +112,8 @@ class OneOf:
 @dataclasses.dataclass(frozen=True)
 class Check:
     """A check of one field that its type cannot say: ``function(field, value)`` returns the value to keep or
-    raises a ValueError naming ``field``; it runs after the type's own checks."""
+    raises a ValueError naming ``field``; it runs after the type's own checks. A module-level function, not a
+    lambda: a class's annotations are evaluated in the class's namespace, where a lambda finds no module names."""
     function: Callable[[str, Any], Any]
 
 
