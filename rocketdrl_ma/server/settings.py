@@ -148,7 +148,7 @@ class ZenohSettings:
 
     def with_overrides(self, listen: list[str] | None = None, connect: list[str] | None = None,
                        mode: str | None = None) -> "ZenohSettings":
-        changes = {"listen": listen, "connect": connect, "mode": mode}
+        changes = {"listen": listen, "connect": connect, "mode": mode or None}
         return ZenohSettings.from_dict({**_values(self), **{k: v for k, v in changes.items() if v is not None}})
 
     def zenoh_config(self, extra: dict[str, Any] | None = None):
