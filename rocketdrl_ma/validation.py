@@ -198,7 +198,7 @@ def _check_type(field: str, value: Any, kind: Any, bounds: Range) -> Any:
     if kind is Any:
         return value
     if origin in (typing.Union, types.UnionType):
-        return _check_union(field, value, args)
+        return _check_union(field, value, args, bounds)
     if origin is Literal:
         return check_choice(field, value, args)
     if kind is bool:
@@ -229,11 +229,11 @@ def _check_type(field: str, value: Any, kind: Any, bounds: Range) -> Any:
     return value
 
 
-def _check_union(field: str, value: Any, members: tuple) -> Any:
+def _check_union(field: str, value: Any, members: tuple, bounds: Range) -> Any:
     """``X | None``: None, else an X; a dataclass section that is null or empty is off (None). ``X | Y``: the first
-    member the value passes as."""
+    member the value passes as. Bounds around the union hold for each member."""
     optional = type(None) in members
-    members = tuple(m for m in members if m is not type(None))
+    members = tuple(m if bounds == Range() else Annotated[m, bounds] for m in members if m is not type(None))
     if optional and (value is None or (len(members) == 1 and dataclasses.is_dataclass(members[0])
                                        and isinstance(value, Mapping) and not value)):
         return None

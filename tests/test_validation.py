@@ -134,6 +134,8 @@ def test_a_config_made_in_python_is_checked_as_a_yaml_would_be():
     with pytest.raises(ValueError, match=r"^outer inner.count: must be >= 1, got 0$"):
         checked_fields(Outer(name="a", inner={"count": 0}), "outer ")
     assert check_value("seed", None, int | None) is None
+    with pytest.raises(ValueError, match=r"^seed: must be >= 0, got -1$"):
+        check_value("seed", -1, Annotated[int | None, Range(minimum=0)])
 
 
 # every shipped config through the loader its folder's files are read by
