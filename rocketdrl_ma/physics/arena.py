@@ -12,7 +12,7 @@ import numpy as np
 
 from . import constants as C
 from .arena_shape import DEFAULT_ARENA_SHAPE, shape_contains
-from .world import PhysicsWorld, _box_vector
+from .world import PhysicsWorld, box_vector
 from .car_config import CarConfig
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_AUTOFLIP_SCALE, CS_AUTOFLIP_TIMER, CS_BOOST, CS_BOOSTING_TIME,
                          CS_DEMO_TIMER, CS_FLIP_TIME, CS_FLIP_TORQUE_X, CS_FLIP_TORQUE_Y, CS_HANDBRAKE,
@@ -320,15 +320,15 @@ class Arena:
 
         The centre of its top face must be inside the arena; the rest may reach into the floor (a low wall is
         a tall box sunk into it)."""
-        half = _box_vector("half_extents", half_extents)
-        _check_inside("center + top half extent", _box_vector("center", center) + [0.0, 0.0, half[2]], 0.0,
+        half = box_vector("half_extents", half_extents)
+        _check_inside("center + top half extent", box_vector("center", center) + [0.0, 0.0, half[2]], 0.0,
                       self._batch.arena_shape)
         return self._batch.add_static_box(self.index, center, half)
 
     def move_static_box(self, box_id: int, center: np.ndarray) -> None:
         """Move a static box (between rounds: it teleports, it does not push what is in the way); as in
         ``add_static_box``, the centre of its top face must be inside the arena."""
-        top = _box_vector("center", center) + [0.0, 0.0, self._batch.static_box_half_extents(box_id)[2]]
+        top = box_vector("center", center) + [0.0, 0.0, self._batch.static_box_half_extents(box_id)[2]]
         _check_inside("center + top half extent", top, 0.0, self._batch.arena_shape)
         self._batch.move_static_box(box_id, center)
 
