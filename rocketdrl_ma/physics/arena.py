@@ -6,8 +6,6 @@ boost pads (``get_boost_pads``), each car's last ball hit and bump cooldown.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import constants as C
@@ -20,6 +18,7 @@ from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_AUTOFLIP_SCALE, CS_AUTOFLIP_
                          CS_IS_FLIPPING, CS_IS_JUMPING, CS_IS_SUPERSONIC, CS_JUMP_TIME, CS_LAST_JUMP, CS_ON_GROUND,
                          CS_SUPERSONIC_TIME, CS_TICK_MEMORY, CS_WHEEL_0)
 from .events import PhysicsEvent
+from .frames import team_spot
 from .mutators import MutatorConfig
 from .state import (BallHitInfo, BallState, BoostPadState, CarControls, CarExtraState, CarState, _trusted,
                     yaw_rot_mat)
@@ -296,9 +295,7 @@ class Arena:
             if len(cars) > len(C.KICKOFF_SPOTS_BLUE):
                 raise ValueError(f"team {team}: at most {len(C.KICKOFF_SPOTS_BLUE)} cars per team for a kickoff")
             for i, car in enumerate(cars):
-                x, y, yaw = C.KICKOFF_SPOTS_BLUE[perm[i]]
-                if team == 1:
-                    x, y, yaw = -x, -y, yaw + math.pi
+                x, y, yaw = team_spot(team, *C.KICKOFF_SPOTS_BLUE[perm[i]])
                 car.set_state(CarState(pos=np.array([x, y, C.CAR_SPAWN_REST_Z]), rot_mat=yaw_rot_mat(yaw),
                                        boost=self.get_mutator_config().car_spawn_boost, on_ground=True,
                                        wheels_in_contact=(True, True, True, True)))

@@ -13,6 +13,7 @@ from .bullet import M_PER_UU, BulletWorld
 from .car_kernel import (CS_BODY_CONTACT, CS_BODY_NORMAL_X, CS_BOOST, CS_DEMO_TIMER, CS_IS_DEMOED, CS_IS_SUPERSONIC,
                          CS_ON_GROUND, interp)
 from .events import CarBumped, CarDemolished, PhysicsEvent
+from .frames import team_spot
 from .mutators import DemoMode, MutatorConfig
 from .state_arrays import CarSlot
 
@@ -158,9 +159,8 @@ class CarContactRules:
     def respawn(self, car_id: int) -> None:
         s = self._slot(car_id)
         k = s.index
-        x, y, yaw = C.RESPAWN_SPOTS_BLUE[int(self.arena_rngs[s.arena].integers(len(C.RESPAWN_SPOTS_BLUE)))]
-        if s.team == 1:
-            x, y, yaw = -x, -y, yaw + math.pi
+        x, y, yaw = team_spot(s.team, *C.RESPAWN_SPOTS_BLUE[int(self.arena_rngs[s.arena].integers(
+            len(C.RESPAWN_SPOTS_BLUE)))])
         self.bullet.bring_into_play(s.body, s.config)
         keep = self.controls[k].copy()
         self.cs[k] = 0.0

@@ -55,6 +55,11 @@ def quat_to_rot_mat(q, out):
     out[2, 2] = 1 - 2 * (x * x + y * y)
 
 
+def team_spot(team: int, x: float, y: float, yaw: float) -> tuple[float, float, float]:
+    """A spawn spot given for blue (x, y in uu, yaw in rad) as ``team``'s: orange's is turned half a circle."""
+    return (x, y, yaw) if team != ORANGE else (-x, -y, yaw + math.pi)
+
+
 def team_axis_sign(team: int) -> np.ndarray:
     """The per-axis sign that takes a world vector (position, velocity, angular velocity) into ``team``'s frame."""
     return np.ones(3) if team != ORANGE else TEAM_MIRROR
