@@ -285,7 +285,8 @@ class Limits:
     fill: tuple[str, ...] = ("idle", "scripted:*")
     requests_per_s: float = 50.0
     request_burst: int = 100
-    observations: tuple[str, ...] = ("seed_sensors", "ray", "team_relative", "seed_barrier", "seed_aerial")
+    observations: tuple[str, ...] = ("general_sensors", "ray", "team_relative", "barrier_sensors", "aerial_sensors",
+                                     "seed_sensors", "seed_barrier", "seed_aerial")
     max_observation_floats: int = 1024
     max_observation_rays: int = 64
 
