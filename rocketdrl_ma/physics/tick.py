@@ -47,19 +47,23 @@ class WorldTick(CarContactRules, StateArrays):
         for _ in range(ticks):
             self._read_state()
             if self._slots:
-                unwritable = car_pre_tick(self.car_pos, self.car_rot, self.car_vel, self.car_ang_vel, self.controls,
-                                          self.wheel_conn, self.wheel_rest, self.wheel_radius, self.wheel_ray_len,
-                                          self.wheel_is_front, self.inv_inertia, self.three_wheel, self.car_arena,
-                                          self.car_active, self.ball_pos, C.BALL_RADIUS, self.cs,
-                                          self.mutator_rows, self.dt)
+                # tuples in CarArrays' and CarModel's field order (see car_pre_tick_classic)
+                unwritable = car_pre_tick(
+                    (self.car_pos, self.car_rot, self.car_vel, self.car_ang_vel, self.controls, self.car_arena,
+                     self.car_active),
+                    (self.wheel_conn, self.wheel_rest, self.wheel_radius, self.wheel_ray_len, self.wheel_is_front,
+                     self.inv_inertia, self.three_wheel),
+                    self.ball_pos, C.BALL_RADIUS, self.cs, self.mutator_rows, self.dt)
             # The balls' whole tick: contacts from the positions at the start of the tick, as in RocketSim.
             self._ball_pos_before[:] = self.ball_pos
-            n_touch = ball_tick(self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen, self.car_pos,
-                                self.car_rot, self.car_vel, self.car_ang_vel, self.car_arena,
-                                self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0), self.hitbox_half,
-                                self.hitbox_offset, self.inv_inertia, self.last_extra_hit_tick, self.bullet.box_rows,
-                                self.mutator_rows, self._mutators[0].gravity_z_uu_s2, self.tick_count + 1, self.dt,
-                                self._touched, self._touch_point, self._touch_normal, self._extra_vel, self._car_push)
+            # tuples in BallArrays', CarBodies' and BallTouches' field order (see ball_tick_classic)
+            n_touch = ball_tick(
+                (self.ball_pos, self.ball_vel, self.ball_ang_vel, self.ball_frozen),
+                (self.car_pos, self.car_rot, self.car_vel, self.car_ang_vel, self.car_arena,
+                 self.car_active & (self.cs[:, CS_IS_DEMOED] == 0.0), self.hitbox_half, self.hitbox_offset,
+                 self.inv_inertia, self.last_extra_hit_tick),
+                self.bullet.box_rows, self.mutator_rows, self._mutators[0].gravity_z_uu_s2, self.tick_count + 1,
+                self.dt, (self._touched, self._touch_point, self._touch_normal, self._extra_vel, self._car_push))
             if self._slots:
                 if n_touch:
                     self._push_cars()  # before the velocities: PyBullet's pose reset clears them
