@@ -8,7 +8,7 @@ and balls of all arenas, so the car and ball models run as compiled kernels and 
 is simply a batch of one. Rocket League units (uu) everywhere outside the PyBullet calls, which use metres.
 
 ``PhysicsWorld`` puts together its jobs, one module each: the PyBullet client and its bodies (``bullet``), the
-arrays (``state_arrays``), the tick (``tick``) with the car-car rules (``car_contacts``); here are what is left:
+arrays (``state_arrays``), the tick (``tick``) with the car-car rules (``car_contacts``); here is what is left:
 making a world, its mutators, its events and its lifetime.
 """
 from __future__ import annotations
