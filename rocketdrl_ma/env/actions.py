@@ -8,7 +8,8 @@ torchrl's PPO (and most continuous-control code) wants one flat Box, not a Dict 
 
 Range: analogue values within 1e-6 of [-1, 1] are clipped onto it (float32 round-off); values clearly
 outside, NaN/inf, non-numbers and wrong shapes raise ``ValueError`` naming the agent. Nothing is clamped
-silently. Parsers: ``SeedActions`` (5), ``ContinuousActions`` (8), ``LookupTableActions`` (Discrete(90)).
+silently. Parsers: ``DriveActions`` (5), ``ContinuousActions`` (8), ``LookupTableActions`` (Discrete(90)). The old
+names (``seed``, ``SeedActions``) still work, with a warning naming the new one (``env.renamed``).
 """
 from __future__ import annotations
 
@@ -20,6 +21,8 @@ from gymnasium import spaces
 
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.rules.state import GameState
+
+from .renamed import ACTION_NAMES, current_name, renamed_class
 
 RANGE_TOLERANCE = 1e-6
 
@@ -80,8 +83,9 @@ class ContinuousActions(ActionParser):
                          _button(c.handbrake)], dtype=np.float32)
 
 
-class SeedActions(ActionParser):
-    """The RocketDRL seed's 2 + 3 actions, ``Box(-1, 1, (5,))``: throttle, steer, then jump, boost, drift."""
+class DriveActions(ActionParser):
+    """Five driving controls, ``Box(-1, 1, (5,))``: throttle, steer, then jump, boost, drift (handbrake) as
+    buttons; no air control (pitch, yaw, roll). The RocketDRL seed's action set."""
 
     def space(self) -> spaces.Box:
         return spaces.Box(-1.0, 1.0, (5,), np.float32)
@@ -171,11 +175,14 @@ class LookupTableActions(ActionParser):
 
 
 ACTION_PARSERS: dict[str, type[ActionParser]] = {
-    "continuous": ContinuousActions, "seed": SeedActions, "lookup": LookupTableActions}
+    "continuous": ContinuousActions, "drive": DriveActions, "lookup": LookupTableActions}
+ACTION_PARSERS.update({old: ACTION_PARSERS[new] for old, new in ACTION_NAMES.items()})  # old names still accepted
 
 
 def make_action_parser(name: str, **kwargs) -> ActionParser:
     """A parser by registry name; unknown names and options are ValueErrors naming the allowed ones."""
+    if isinstance(name, str):
+        name = current_name("action", name, ACTION_NAMES)
     if not isinstance(name, str) or name not in ACTION_PARSERS:
         raise ValueError(f"action: unknown action parser {name!r}; allowed: {sorted(ACTION_PARSERS)}")
     cls = ACTION_PARSERS[name]
@@ -184,3 +191,8 @@ def make_action_parser(name: str, **kwargs) -> ActionParser:
     if unknown:
         raise ValueError(f"action.{name}: unknown option(s) {unknown}; allowed: {allowed}")
     return cls(**kwargs)
+
+
+def __getattr__(name: str) -> type:
+    """``SeedActions`` (now ``DriveActions``) still imports, with a DeprecationWarning."""
+    return renamed_class(__name__, name, globals())

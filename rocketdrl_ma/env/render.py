@@ -18,6 +18,7 @@ import pybullet as p
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.physics.arena_shape import DEFAULT_ARENA_SHAPE, arena_shape_index, shape_mesh
 from rocketdrl_ma.physics.car_config import PRESETS, CarConfig
+from rocketdrl_ma.physics.frames import rot_mat_to_quat
 from rocketdrl_ma.rules.state import BLUE, ORANGE, GameState, agent_team
 
 M_PER_UU = 1.0 / C.UU_PER_M
@@ -44,26 +45,6 @@ def _arena_mesh(arena_shape: str) -> tuple[np.ndarray, np.ndarray]:
     """The surface mesh of the arena of ``arena_shape`` in uu (vertices (N, 3) float64, indices (M, 3) int32)."""
     verts, idx = shape_mesh(arena_shape)
     return np.asarray(verts, dtype=np.float64).reshape(-1, 3), np.asarray(idx, dtype=np.int64).reshape(-1, 3)
-
-
-def rot_mat_to_quat(rot: np.ndarray) -> tuple[float, float, float, float]:
-    """PyBullet quaternion (x, y, z, w) of a rotation matrix whose columns are the body's axes in the world."""
-    m = np.asarray(rot, dtype=np.float64)
-    tr = m[0, 0] + m[1, 1] + m[2, 2]
-    if tr > 0.0:
-        s = 2.0 * math.sqrt(tr + 1.0)
-        w, x, y, z = 0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        w, x, y, z = (m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        w, x, y, z = (m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        w, x, y, z = (m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s
-    n = math.sqrt(w * w + x * x + y * y + z * z)
-    return (x / n, y / n, z / n, w / n)
 
 
 def _team_rgba(agent: str) -> tuple[float, ...]:

@@ -13,7 +13,7 @@ from typing import Callable
 import numpy as np
 
 from rocketdrl_ma.config import shipped_files
-from rocketdrl_ma.physics import Arena, Bump, CarControls, CarState, yaw_rot_mat
+from rocketdrl_ma.physics import Arena, CarBumped, CarControls, CarState, yaw_rot_mat
 from rocketdrl_ma.physics.arena_shape import ARENA_SHAPES
 from rocketdrl_ma.physics.compile_notice import kernels_compiled
 
@@ -32,7 +32,7 @@ def game_configs() -> list[str]:
 
 
 def _bump(arena_shape: str) -> None:
-    """Two grounded cars, one driving into the other below supersonic speed, until Bump."""
+    """Two grounded cars, one driving into the other below supersonic speed, until CarBumped."""
     arena = Arena(seed=0, arena_shape=arena_shape)
     try:
         attacker, victim = arena.add_car(team=0), arena.add_car(team=1)
@@ -43,7 +43,7 @@ def _bump(arena_shape: str) -> None:
         attacker.set_controls(CarControls(throttle=1.0))
         for _ in range(BUMP_MAX_TICKS):
             arena.step(1)
-            if any(isinstance(e, Bump) for e in arena.drain_events()):
+            if any(isinstance(e, CarBumped) for e in arena.drain_events()):
                 return
         raise RuntimeError("warmup: the staged bump never happened; the bump kernel is not compiled")
     finally:

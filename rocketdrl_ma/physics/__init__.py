@@ -35,12 +35,18 @@ from .arena import Arena, Ball, BoostPad, Car
 from .batch import ArenaBatch
 from .arena_shape import ARENA_SHAPES, DEFAULT_ARENA_SHAPE
 from .car_config import PRESETS, CarConfig, get_preset
-from .events import BallTouch, BoostPickup, Bump, CarHit, Demo, PhysicsEvent, PhysicsEventKind
+from .events import (BallTouch, BoostPadTaken, BumperHit, CarBumped, CarDemolished, PhysicsEvent, PhysicsEventKind,
+                     renamed)
 from .mutators import DemoMode, MutatorConfig
 from .state import BallHitInfo, BallState, BoostPadState, CarControls, CarExtraState, CarState, yaw_rot_mat
 from .world import BatchArrays, PhysicsWorld
 
 __all__ = ["ARENA_SHAPES", "Arena", "ArenaBatch", "Ball", "BallHitInfo", "BallState", "BallTouch", "BatchArrays",
-           "BoostPad", "BoostPadState", "BoostPickup", "Bump", "Car", "CarConfig", "CarControls", "CarExtraState",
-           "CarHit", "CarState", "DEFAULT_ARENA_SHAPE", "Demo", "DemoMode", "MutatorConfig", "PRESETS",
+           "BoostPad", "BoostPadState", "BoostPadTaken", "BumperHit", "Car", "CarBumped", "CarConfig", "CarControls",
+           "CarDemolished", "CarExtraState", "CarState", "DEFAULT_ARENA_SHAPE", "DemoMode", "MutatorConfig", "PRESETS",
            "PhysicsEvent", "PhysicsEventKind", "PhysicsWorld", "get_preset", "yaw_rot_mat"]
+
+
+def __getattr__(name: str) -> type:
+    """The physics events' old names (``events.RENAMED``) still import, with a DeprecationWarning."""
+    return renamed(__name__, name)

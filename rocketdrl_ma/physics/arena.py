@@ -6,13 +6,11 @@ boost pads (``get_boost_pads``), each car's last ball hit and bump cooldown.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from . import constants as C
 from .arena_shape import DEFAULT_ARENA_SHAPE, shape_contains
-from .world import PhysicsWorld, _box_vector
+from .world import PhysicsWorld, box_vector
 from .car_config import CarConfig
 from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_AUTOFLIP_SCALE, CS_AUTOFLIP_TIMER, CS_BOOST, CS_BOOSTING_TIME,
                          CS_DEMO_TIMER, CS_FLIP_TIME, CS_FLIP_TORQUE_X, CS_FLIP_TORQUE_Y, CS_HANDBRAKE,
@@ -20,6 +18,7 @@ from .car_kernel import (CS_AIR_TIME_SINCE_JUMP, CS_AUTOFLIP_SCALE, CS_AUTOFLIP_
                          CS_IS_FLIPPING, CS_IS_JUMPING, CS_IS_SUPERSONIC, CS_JUMP_TIME, CS_LAST_JUMP, CS_ON_GROUND,
                          CS_SUPERSONIC_TIME, CS_TICK_MEMORY, CS_WHEEL_0)
 from .events import PhysicsEvent
+from .frames import team_spot
 from .mutators import MutatorConfig
 from .state import (BallHitInfo, BallState, BoostPadState, CarControls, CarExtraState, CarState, _trusted,
                     yaw_rot_mat)
@@ -296,9 +295,7 @@ class Arena:
             if len(cars) > len(C.KICKOFF_SPOTS_BLUE):
                 raise ValueError(f"team {team}: at most {len(C.KICKOFF_SPOTS_BLUE)} cars per team for a kickoff")
             for i, car in enumerate(cars):
-                x, y, yaw = C.KICKOFF_SPOTS_BLUE[perm[i]]
-                if team == 1:
-                    x, y, yaw = -x, -y, yaw + math.pi
+                x, y, yaw = team_spot(team, *C.KICKOFF_SPOTS_BLUE[perm[i]])
                 car.set_state(CarState(pos=np.array([x, y, C.CAR_SPAWN_REST_Z]), rot_mat=yaw_rot_mat(yaw),
                                        boost=self.get_mutator_config().car_spawn_boost, on_ground=True,
                                        wheels_in_contact=(True, True, True, True)))
@@ -320,15 +317,15 @@ class Arena:
 
         The centre of its top face must be inside the arena; the rest may reach into the floor (a low wall is
         a tall box sunk into it)."""
-        half = _box_vector("half_extents", half_extents)
-        _check_inside("center + top half extent", _box_vector("center", center) + [0.0, 0.0, half[2]], 0.0,
+        half = box_vector("half_extents", half_extents)
+        _check_inside("center + top half extent", box_vector("center", center) + [0.0, 0.0, half[2]], 0.0,
                       self._batch.arena_shape)
         return self._batch.add_static_box(self.index, center, half)
 
     def move_static_box(self, box_id: int, center: np.ndarray) -> None:
         """Move a static box (between rounds: it teleports, it does not push what is in the way); as in
         ``add_static_box``, the centre of its top face must be inside the arena."""
-        top = _box_vector("center", center) + [0.0, 0.0, self._batch.static_box_half_extents(box_id)[2]]
+        top = box_vector("center", center) + [0.0, 0.0, self._batch.static_box_half_extents(box_id)[2]]
         _check_inside("center + top half extent", top, 0.0, self._batch.arena_shape)
         self._batch.move_static_box(box_id, center)
 

@@ -23,6 +23,8 @@ for everything):
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import literally, njit
 
@@ -57,6 +59,37 @@ _CAR = 20       # car row in the batch arrays; WORLD for the merged arena contac
 WORLD = -1      # (velocity rows: RocketSim solves the merged contact; each point only pushes the overlap apart)
 WORLD_POINT = -2
 _ROW = 21
+
+
+class BallArrays(NamedTuple):
+    """Every arena's ball, by arena (uu, uu/s, rad/s)."""
+    pos: np.ndarray         # (arenas, 3)
+    vel: np.ndarray         # (arenas, 3)
+    ang_vel: np.ndarray     # (arenas, 3)
+    frozen: np.ndarray      # (arenas,) bool: hangs where it was placed until a touch
+
+
+class CarBodies(NamedTuple):
+    """What the ball meets of every car, by batch row: its pose, velocities, hitbox and extra-push memory."""
+    pos: np.ndarray              # (cars, 3)
+    rot: np.ndarray              # (cars, 3, 3)
+    vel: np.ndarray              # (cars, 3)
+    ang_vel: np.ndarray          # (cars, 3)
+    arena: np.ndarray            # (cars,) int
+    live: np.ndarray             # (cars,) bool: active and not demolished
+    hitbox_half: np.ndarray      # (cars, 3)
+    hitbox_offset: np.ndarray    # (cars, 3)
+    inv_inertia: np.ndarray      # (cars, 3)
+    last_extra_tick: np.ndarray  # (cars,) int: the last tick the car gave the extra push
+
+
+class BallTouches(NamedTuple):
+    """What ``ball_tick`` reports per car (by batch row), overwritten every tick."""
+    touched: np.ndarray     # (cars,) bool
+    point: np.ndarray       # (cars, 3) the contact point on the ball
+    normal: np.ndarray      # (cars, 3) from the car towards the ball
+    extra_vel: np.ndarray   # (cars, 3) the extra push given, zero if none
+    car_push: np.ndarray    # (cars, 3) the car's position change of the overlap correction
 
 
 @njit(cache=True, nogil=True)
@@ -178,18 +211,19 @@ def _friction_direction(n, rel):
 
 
 @njit(cache=True, nogil=True)
-def ball_tick(shape, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
-              car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z, tick, dt,
-              touched, touch_point, touch_normal, extra_vel, car_push):
+def ball_tick(shape, balls, cars, boxes, mut, gravity_z, tick, dt, touches):
     """One tick of every arena's ball (see the module docstring) in an arena of ``shape`` (``arena_shape``'s
-    integer, compiled per value: call ``ball_tick_classic`` or ``ball_tick_game``); writes the ball arrays in
-    place and changes the velocities of the cars that touch a ball. Per car it reports ``touched`` (this tick), the
-    contact point on the ball and the normal, the extra push it gave (``extra_vel``, zero if none) and
-    ``car_push``, the position change of the overlap correction.
+    integer, compiled per value: call ``ball_tick_classic`` or ``ball_tick_game``); writes ``balls`` (``BallArrays``)
+    in place and changes the velocities of the cars (``CarBodies``) that touch a ball. Per car it reports
+    ``touches`` (``BallTouches``). ``boxes`` are the static boxes' rows (arena, centre, half extents).
 
-    ``car_vel`` holds the cars' velocities before this tick's gravity (PyBullet adds it during its step); the solve
-    adds it and takes it off again. Returns the number of touching cars."""
+    The cars' ``vel`` holds their velocities before this tick's gravity (PyBullet adds it during its step); the
+    solve adds it and takes it off again. Returns the number of touching cars."""
     literally(shape)
+    ball_pos, ball_vel, ball_ang_vel, frozen = balls
+    (car_pos, car_rot, car_vel, car_ang_vel, car_arena, car_live, hitbox_half, hitbox_offset, car_inv_inertia,
+     last_extra_tick) = cars
+    touched, touch_point, touch_normal, extra_vel, car_push = touches
     n_cars = car_pos.shape[0]
     n_touch = 0
     rows = np.zeros((n_cars + 10 + boxes.shape[0], _ROW))
@@ -296,24 +330,21 @@ def ball_tick(shape, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot,
     return n_touch
 
 
+# The entry points take plain tuples in the records' field order and make the records inside: numba types a plain
+# tuple argument in compiled code, a NamedTuple in Python code, which cost microseconds a call.
 @njit(cache=True, nogil=True)
-def ball_tick_classic(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
-                      car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z,
-                      tick, dt, touched, touch_point, touch_normal, extra_vel, car_push):
-    """``ball_tick`` in the "classic" arena."""
-    return ball_tick(CLASSIC, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel,
-                     car_arena, car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes,
-                     mut, gravity_z, tick, dt, touched, touch_point, touch_normal, extra_vel, car_push)
+def ball_tick_classic(balls, cars, boxes, mut, gravity_z, tick, dt, touches):
+    """``ball_tick`` in the "classic" arena; ``balls``, ``cars``, ``touches``: tuples of ``BallArrays``',
+    ``CarBodies``' and ``BallTouches``' fields."""
+    return ball_tick(CLASSIC, BallArrays(*balls), CarBodies(*cars), boxes, mut, gravity_z, tick, dt,
+                     BallTouches(*touches))
 
 
 @njit(cache=True, nogil=True)
-def ball_tick_game(ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel, car_arena,
-                   car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes, mut, gravity_z,
-                   tick, dt, touched, touch_point, touch_normal, extra_vel, car_push):
-    """``ball_tick`` in the "game" arena."""
-    return ball_tick(GAME, ball_pos, ball_vel, ball_ang_vel, frozen, car_pos, car_rot, car_vel, car_ang_vel,
-                     car_arena, car_live, hitbox_half, hitbox_offset, car_inv_inertia, last_extra_tick, boxes,
-                     mut, gravity_z, tick, dt, touched, touch_point, touch_normal, extra_vel, car_push)
+def ball_tick_game(balls, cars, boxes, mut, gravity_z, tick, dt, touches):
+    """``ball_tick`` in the "game" arena (arguments as ``ball_tick_classic``'s)."""
+    return ball_tick(GAME, BallArrays(*balls), CarBodies(*cars), boxes, mut, gravity_z, tick, dt,
+                     BallTouches(*touches))
 
 
 @njit(cache=True, nogil=True)

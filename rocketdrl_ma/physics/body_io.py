@@ -11,6 +11,7 @@ import pybullet as pb
 from numba import njit
 
 from . import constants as C
+from .frames import quat_to_rot_mat
 
 ROW_SIZE = 13  # position (m), quaternion xyzw, linear velocity (m/s), angular velocity (rad/s)
 
@@ -31,21 +32,6 @@ def read_rows(bodies: list[int], client: int) -> np.ndarray:
 
 
 @njit(cache=True, nogil=True)
-def quat_to_mat(q, out):
-    """An xyzw quaternion to a 3x3 rotation matrix, written into ``out``."""
-    x, y, z, w = q[0], q[1], q[2], q[3]
-    out[0, 0] = 1 - 2 * (y * y + z * z)
-    out[0, 1] = 2 * (x * y - z * w)
-    out[0, 2] = 2 * (x * z + y * w)
-    out[1, 0] = 2 * (x * y + z * w)
-    out[1, 1] = 1 - 2 * (x * x + z * z)
-    out[1, 2] = 2 * (y * z - x * w)
-    out[2, 0] = 2 * (x * z - y * w)
-    out[2, 1] = 2 * (y * z + x * w)
-    out[2, 2] = 1 - 2 * (x * x + y * y)
-
-
-@njit(cache=True, nogil=True)
 def unpack_rows(rows, cars, origins, car_arena, car_pos, car_quat, car_rot, car_vel, car_ang_vel):
     """Row ``r`` of ``read_rows`` into car ``cars[r]``, in uu relative to its arena's origin (the arithmetic of a
     whole-array ``pos * UU_PER_M - origin``)."""
@@ -58,4 +44,4 @@ def unpack_rows(rows, cars, origins, car_arena, car_pos, car_quat, car_rot, car_
             car_ang_vel[i, j] = rows[r, 10 + j]
         for j in range(4):
             car_quat[i, j] = rows[r, 3 + j]
-        quat_to_mat(car_quat[i], car_rot[i])
+        quat_to_rot_mat(car_quat[i], car_rot[i])

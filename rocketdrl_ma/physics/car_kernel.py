@@ -188,15 +188,34 @@ class CarFrame(NamedTuple):
     down: np.ndarray
 
 
-@njit(cache=True, nogil=True)
-def car_pre_tick(shape, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
-                 wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut, dt):
-    """Advance every active, non-demoed car's model by one tick in an arena of ``shape`` (``arena_shape``'s integer,
-    compiled per value: call ``car_pre_tick_classic`` or ``car_pre_tick_game``): writes ``vel``/``ang_vel`` in place.
+class CarArrays(NamedTuple):
+    """Every car's state for the car model, by batch row (uu, uu/s, rad/s)."""
+    pos: np.ndarray        # (cars, 3)
+    rot: np.ndarray        # (cars, 3, 3), columns forward, right, up
+    vel: np.ndarray        # (cars, 3), written in place
+    ang_vel: np.ndarray    # (cars, 3), written in place
+    controls: np.ndarray   # (cars, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake
+    arena: np.ndarray      # (cars,) int
+    active: np.ndarray     # (cars,) bool
 
-    ``pos``/``vel``/``ang_vel`` are (N, 3), ``rot`` is (N, 3, 3) with columns forward/right/up,
-    ``controls`` is (N, 8): throttle, steer, pitch, yaw, roll, jump, boost, handbrake; ``mut`` holds each arena's
-    ``MutatorConfig.as_row()``.
+
+class CarModel(NamedTuple):
+    """Every car's build (``CarConfig``), by batch row."""
+    wheel_conn: np.ndarray      # (cars, 4, 3) the wheels' connection points, car frame (uu)
+    wheel_rest: np.ndarray      # (cars, 4) suspension rest lengths (uu)
+    wheel_radius: np.ndarray    # (cars, 4) uu
+    wheel_ray_len: np.ndarray   # (cars, 4) uu
+    wheel_is_front: np.ndarray  # (cars, 4) bool
+    inv_inertia: np.ndarray     # (cars, 3) 1 / the inertia diagonal
+    three_wheel: np.ndarray     # (cars,) bool
+
+
+@njit(cache=True, nogil=True)
+def car_pre_tick(shape, cars, model, ball_pos, ball_radius, cs, mut, dt):
+    """Advance every active, non-demoed car's model by one tick in an arena of ``shape`` (``arena_shape``'s integer,
+    compiled per value: call ``car_pre_tick_classic`` or ``car_pre_tick_game``): writes the velocities of ``cars``
+    (``CarArrays``; ``model``: their ``CarModel``) in place. ``cs`` is the cars' state rows (``CS_*``), ``mut``
+    holds each arena's ``MutatorConfig.as_row()``.
 
     The stages follow RocketSim's ``Car::_PreTickUpdate``: the vehicle's first half (wheel rays, then the
     suspension and tyre impulses from the state at the start of the tick with last tick's steering and
@@ -207,6 +226,8 @@ def car_pre_tick(shape, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest
     Returns how many cars' velocities must not be written back to PyBullet (inactive or demolished ones).
     """
     literally(shape)
+    pos, rot, vel, ang_vel, controls, car_arena, active = cars
+    wheel_conn, wheel_rest, wheel_radius, wheel_ray_len, wheel_is_front, inv_inertia, three_wheel = model
     # Scratch reused by every car: fresh small arrays per car and wheel were most of this kernel's time.
     frame = CarFrame(np.empty(3), np.empty(3), np.empty(3), np.empty(3))
     wheels = WheelContacts(np.zeros(4, dtype=np.bool_), np.zeros(4, dtype=np.bool_), np.zeros(4), np.zeros((4, 3)),
@@ -264,24 +285,19 @@ def car_pre_tick(shape, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest
     return n_unwritable
 
 
+# The entry points take plain tuples in the records' field order and make the records inside: numba types a plain
+# tuple argument in compiled code, a NamedTuple in Python code, which cost microseconds a call.
 @njit(cache=True, nogil=True)
-def car_pre_tick_classic(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
-                         wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs,
-                         mut, dt):
-    """``car_pre_tick`` in the "classic" arena."""
-    return car_pre_tick(CLASSIC, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius,
-                        wheel_ray_len, wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos,
-                        ball_radius, cs, mut, dt)
+def car_pre_tick_classic(cars, model, ball_pos, ball_radius, cs, mut, dt):
+    """``car_pre_tick`` in the "classic" arena; ``cars``, ``model``: tuples of ``CarArrays``' and ``CarModel``'s
+    fields."""
+    return car_pre_tick(CLASSIC, CarArrays(*cars), CarModel(*model), ball_pos, ball_radius, cs, mut, dt)
 
 
 @njit(cache=True, nogil=True)
-def car_pre_tick_game(pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
-                      wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs, mut,
-                      dt):
-    """``car_pre_tick`` in the "game" arena."""
-    return car_pre_tick(GAME, pos, rot, vel, ang_vel, controls, wheel_conn, wheel_rest, wheel_radius, wheel_ray_len,
-                        wheel_is_front, inv_inertia, three_wheel, car_arena, active, ball_pos, ball_radius, cs,
-                        mut, dt)
+def car_pre_tick_game(cars, model, ball_pos, ball_radius, cs, mut, dt):
+    """``car_pre_tick`` in the "game" arena (arguments as ``car_pre_tick_classic``'s)."""
+    return car_pre_tick(GAME, CarArrays(*cars), CarModel(*model), ball_pos, ball_radius, cs, mut, dt)
 
 
 @njit(cache=True, nogil=True, inline="always")

@@ -3,10 +3,12 @@
 RocketSim reports these through callbacks (ball touch, car bump / demo, boost pickup); here every tick appends
 them to its arena's list, in the order the tick produced them, and game logic takes them when it wants them.
 Every event names its arena (the index in the batch) and the tick it happened on (``Arena.tick_count`` after
-that tick).
+that tick). They describe contacts; the rules' events (``rules.events``: ``Touch``, ``Bump``, ``Demo``,
+``BoostPickup``...) are their game meaning, and are named apart from these.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import ClassVar
@@ -36,9 +38,9 @@ class BallTouch:
 
 
 @dataclass(frozen=True, slots=True)
-class CarHit:
-    """``attacker_id`` hit ``victim_id`` with its front bumper (RocketSim's car bump callback): a ``Bump`` or a
-    ``Demo``."""
+class BumperHit:
+    """``attacker_id`` hit ``victim_id`` with its front bumper (RocketSim's car bump callback): ``CarBumped`` or
+    ``CarDemolished``."""
     tick: int
     arena: int
     attacker_id: int
@@ -46,19 +48,19 @@ class CarHit:
 
 
 @dataclass(frozen=True, slots=True)
-class Bump(CarHit):
+class CarBumped(BumperHit):
     """The victim was pushed away (not demolished)."""
     kind: ClassVar[PhysicsEventKind] = PhysicsEventKind.BUMP
 
 
 @dataclass(frozen=True, slots=True)
-class Demo(CarHit):
+class CarDemolished(BumperHit):
     """The victim was demolished (RocketSim's bump callback with ``is_demo``)."""
     kind: ClassVar[PhysicsEventKind] = PhysicsEventKind.DEMO
 
 
 @dataclass(frozen=True, slots=True)
-class BoostPickup:
+class BoostPadTaken:
     """``car_id`` took boost pad ``pad_index`` (``Arena.get_boost_pads()`` order) and gained ``amount``."""
     tick: int
     arena: int
@@ -68,4 +70,21 @@ class BoostPickup:
     kind: ClassVar[PhysicsEventKind] = PhysicsEventKind.BOOST_PICKUP
 
 
-PhysicsEvent = BallTouch | Bump | Demo | BoostPickup
+PhysicsEvent = BallTouch | CarBumped | CarDemolished | BoostPadTaken
+
+#: the names these events had when they shared them with the rules' events
+RENAMED = {"CarHit": "BumperHit", "Bump": "CarBumped", "Demo": "CarDemolished", "BoostPickup": "BoostPadTaken"}
+
+
+def renamed(module: str, name: str) -> type:
+    """An event class asked for by its old name (``RENAMED``), with a DeprecationWarning naming the new one."""
+    if name not in RENAMED:
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+    new = RENAMED[name]
+    warnings.warn(f"{module}.{name} is now {new} (the rules' events keep the name {name})", DeprecationWarning,
+                  stacklevel=3)
+    return globals()[new]
+
+
+def __getattr__(name: str) -> type:
+    return renamed(__name__, name)

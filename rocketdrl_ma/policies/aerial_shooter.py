@@ -9,10 +9,10 @@ point; in the air it points the nose along ``a`` (a PD controller on pitch and y
 while the nose is on it. Re-planned every decision, the thrust corrects the flight as it goes. The contact point
 is behind the ball on its line to the goal, so the car's nose meets the ball from behind and sends it there.
 
-It is stateless and reads only what ``seed_aerial+team_relative`` shows a learner: the car's and the ball's
+It is stateless and reads only what ``aerial_sensors+team_relative`` shows a learner: the car's and the ball's
 positions, velocities, orientation and angular velocity, the car's height and jump state, and the release
 countdown (``mode_state``). It needs pitch, yaw and roll, so it plays through the continuous actions (RLGym's
-lookup table snaps its stick), not the seed's five buttons. Its score at difficulty 1: `rocketdrl-ma eval
+lookup table snaps its stick), not the five ``drive`` actions. Its score at difficulty 1: `rocketdrl-ma eval
 scripted:aerial_shooter --env minigames/aerial.yaml --episodes 200` (the figures: docs/experiments/index.md).
 """
 from __future__ import annotations

@@ -6,9 +6,9 @@ ball *under* a lifted barrier (a soft ground shot, so it stays below the bottom 
 from there). It works out from the state alone, every decision, which of these it is doing, so one instance
 plays any number of cars and episodes (as a kickstart teacher must).
 
-It drives with throttle, steer, boost and handbrake only: the RocketDRL seed's five actions express all of it,
+It drives with throttle, steer, boost and handbrake only: the five ``drive`` actions express all of it,
 as do RLGym's continuous controls. It reads the car's and the ball's positions and velocities and the
-barrier's box: all in the ``seed_barrier+team_relative`` observation (the seed's sensors lack the ball's
+barrier's box: all in the ``barrier_sensors+team_relative`` observation (the general sensors lack the ball's
 velocity).
 """
 from __future__ import annotations

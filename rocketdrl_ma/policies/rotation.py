@@ -41,6 +41,7 @@ from enum import IntEnum
 import numpy as np
 
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.frames import team_axis_sign
 from rocketdrl_ma.rules.state import GameState, agent_number, agent_team
 
 from .rotator_tuning import KickoffLane, RotatorTuning
@@ -83,7 +84,7 @@ class TeamView:
 
 def frame_sign(agent: str) -> np.ndarray:
     """Orange's team frame is the field turned half a circle: x -> -x, y -> -y."""
-    return np.ones(3) if agent_team(agent) == 0 else np.array([-1.0, -1.0, 1.0])
+    return team_axis_sign(agent_team(agent))
 
 
 def team_view(agent: str, state: GameState) -> TeamView:

@@ -14,6 +14,7 @@ import numpy as np
 
 from rocketdrl_ma.physics import CarControls, CarState
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.frames import rot_to_team_frame, to_team_frame
 from rocketdrl_ma.rules.state import GameState, agent_team
 from rocketdrl_ma.validation import check_name
 
@@ -33,7 +34,7 @@ SLIDE_ANGLE_RAD = 1.3
 
 def team_frame(agent: str, vec: np.ndarray) -> np.ndarray:
     """Orange sees the field turned half a circle (x -> -x, y -> -y) so every bot attacks +y."""
-    return vec if agent_team(agent) == 0 else vec * np.array([-1.0, -1.0, 1.0])
+    return to_team_frame(agent_team(agent), vec)
 
 
 def drive_to(car_pos: np.ndarray, car_rot: np.ndarray, target: np.ndarray, speed_up: bool = True,
@@ -310,7 +311,7 @@ class Idle(ScriptedBot):
 
 
 def _team_rot(agent: str, rot: np.ndarray) -> np.ndarray:
-    return rot if agent_team(agent) == 0 else np.diag([-1.0, -1.0, 1.0]) @ rot
+    return rot_to_team_frame(agent_team(agent), rot)
 
 
 def _on_its_side_against_a_wall(car: CarState, below_uu_s: float = 200.0) -> bool:

@@ -86,7 +86,7 @@ class Miss(GameEvent):
 
 @dataclass(frozen=True)
 class CarHit(GameEvent):
-    """``agent``'s car hit ``victim``'s (the physics' ``CarHit``): a ``Demo`` or a ``Bump``."""
+    """``agent``'s car hit ``victim``'s (the physics' ``BumperHit``): a ``Demo`` or a ``Bump``."""
     agent: str
     victim: str
 

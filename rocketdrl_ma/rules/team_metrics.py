@@ -1,5 +1,6 @@
-"""Team metrics of a match, built from the physics' typed events (``BallTouch``, ``Demo``, ``BoostPickup``) and the
-cars' positions: how a team played together, for match summaries, league reports and training logs.
+"""Team metrics of a match, built from the physics' typed events (``BallTouch``, ``CarDemolished``,
+``BoostPadTaken``) and the cars' positions: how a team played together, for match summaries, league reports and
+training logs.
 
 Definitions (also in docs/guides/team-play.md, "Team metrics"):
 
@@ -14,8 +15,8 @@ Definitions (also in docs/guides/team-play.md, "Team metrics"):
   the decisions of live play (not during kickoff countdowns); none for a team of one.
 - **last back share**: for each car, the share of live-play decisions in which it was the team's live car nearest
   its own goal line.
-- **demos**: cars demolished by this car (``Demo`` events; bumps do not count).
-- **boost collected**: boost gained from pads (``BoostPickup.amount``; a pad taken with a full tank gives 0).
+- **demos**: cars demolished by this car (``CarDemolished`` events; bumps do not count).
+- **boost collected**: boost gained from pads (``BoostPadTaken.amount``; a pad taken with a full tank gives 0).
 
 A goal or a kickoff ends every chain: a pass, assist or double commit never spans two kickoffs.
 """

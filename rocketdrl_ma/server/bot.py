@@ -98,7 +98,7 @@ class Bot:
     """Subclass and implement ``act``; ``run`` joins a match and plays it to the end.
 
     Class attributes a subclass may set: ``name`` (shown on scoreboards and stored with results),
-    ``observation`` / ``action`` (a builder / parser spec such as ``"seed_sensors"`` or
+    ``observation`` / ``action`` (a builder / parser spec such as ``"general_sensors"`` or
     ``{"name": "ray", "n_rays": 12}``; None = the match's), ``with_state`` (each message carries the
     full ``GameState``; scripted bots need it).
     """

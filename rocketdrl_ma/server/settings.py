@@ -256,7 +256,8 @@ class Limits:
     requests_per_s: Amount = 50.0
     request_burst: Count = 100
     observations: Annotated[Names, Check(_check_builders)] = (
-        "seed_sensors", "ray", "team_relative", "seed_barrier", "seed_aerial")
+        "general_sensors", "ray", "team_relative", "barrier_sensors", "aerial_sensors", "seed_sensors", "seed_barrier",
+        "seed_aerial")
     max_observation_floats: Count = 1024
     max_observation_rays: Count = 64
 

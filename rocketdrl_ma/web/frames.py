@@ -19,13 +19,13 @@ match's kickoff countdown when the page server knows it (the page counts it down
 """
 from __future__ import annotations
 
-import math
 from typing import Any, Iterable
 
 import msgpack
 import numpy as np
 
 from rocketdrl_ma.physics import PRESETS
+from rocketdrl_ma.physics.frames import rot_mat_to_quat_raw
 from rocketdrl_ma.rules.events import GameEvent, GameEventKind
 from rocketdrl_ma.rules.state import GameState, agent_team
 
@@ -45,21 +45,8 @@ def pack_message(message: dict) -> bytes:
 
 
 def rotation_to_quaternion(rot: np.ndarray) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of a proper rotation matrix (Shepperd's method: stable for every angle)."""
-    m = np.asarray(rot, dtype=np.float64)
-    trace = m[0, 0] + m[1, 1] + m[2, 2]
-    if trace > 0.0:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        w, x, y, z = 0.25 * s, (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s
-    elif m[0, 0] > m[1, 1] and m[0, 0] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[0, 0] - m[1, 1] - m[2, 2])
-        w, x, y, z = (m[2, 1] - m[1, 2]) / s, 0.25 * s, (m[0, 1] + m[1, 0]) / s, (m[0, 2] + m[2, 0]) / s
-    elif m[1, 1] > m[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + m[1, 1] - m[0, 0] - m[2, 2])
-        w, x, y, z = (m[0, 2] - m[2, 0]) / s, (m[0, 1] + m[1, 0]) / s, 0.25 * s, (m[1, 2] + m[2, 1]) / s
-    else:
-        s = 2.0 * math.sqrt(1.0 + m[2, 2] - m[0, 0] - m[1, 1])
-        w, x, y, z = (m[1, 0] - m[0, 1]) / s, (m[0, 2] + m[2, 0]) / s, (m[1, 2] + m[2, 1]) / s, 0.25 * s
+    """(x, y, z, w) of a proper rotation matrix (``physics.frames``), with ``w >= 0``."""
+    x, y, z, w = rot_mat_to_quat_raw(np.asarray(rot, dtype=np.float64))
     if w < 0.0:  # one sign per rotation, so consecutive frames interpolate the short way more often
         w, x, y, z = -w, -x, -y, -z
     return x, y, z, w

@@ -149,7 +149,7 @@ def test_lookup_keeps_a_bots_jumps_and_dodges():
 
 
 def test_registry():
-    assert set(ACTION_PARSERS) == {"seed", "continuous", "lookup"}
+    assert set(ACTION_PARSERS) == {"drive", "continuous", "lookup", "seed"}  # "seed": drive's old name
     assert all(issubclass(cls, ActionParser) for cls in ACTION_PARSERS.values())
     assert isinstance(make_action_parser("lookup"), LookupTableActions)
     assert isinstance(make_action_parser("seed"), SeedActions)

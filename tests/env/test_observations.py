@@ -335,7 +335,8 @@ def test_seed_euler_angles():
 
 # ---------------------------------------------------------------- registry and combination
 def test_registry_and_combination():
-    assert set(OBS_BUILDERS) == {"seed_sensors", "ray", "team_relative", "seed_barrier", "seed_aerial"}
+    assert set(OBS_BUILDERS) == {"general_sensors", "ray", "team_relative", "barrier_sensors", "aerial_sensors",
+                                 "seed_sensors", "seed_barrier", "seed_aerial"}  # the last three: old names
     assert isinstance(make_obs_builder("ray", n_rays=4), RaySensor)
     combo = make_obs_builder("seed_sensors+ray", ray={"n_rays": 4})
     assert isinstance(combo, CombinedObs) and combo.space(2, 2).shape == (18 + 20,)

@@ -150,7 +150,8 @@ def run_ours(scenes: list[Scene], batch_size: int = 128) -> list[Trace]:
 
 
 def _run_ours_batch(scenes: list[Scene]) -> list[Trace]:
-    from rocketdrl_ma.physics import ArenaBatch, BallState, BallTouch, CarControls, CarHit, CarState, Demo
+    from rocketdrl_ma.physics import (ArenaBatch, BallState, BallTouch, BumperHit, CarControls, CarDemolished,
+                                      CarState)
     batch = ArenaBatch(len(scenes))
     cars = [[arena.add_car(team=c.team) for c in scene.cars] for arena, scene in zip(batch.arenas, scenes)]
     traces = [_empty_trace(scene) for scene in scenes]
@@ -183,8 +184,9 @@ def _run_ours_batch(scenes: list[Scene]) -> list[Trace]:
                 if isinstance(e, BallTouch):
                     traces[k].touches.append(e.tick)
                     traces[k].extra_pushes += e.extra_impulse
-                elif isinstance(e, CarHit):
-                    traces[k].hits.append((e.tick, index[k][e.attacker_id], index[k][e.victim_id], isinstance(e, Demo)))
+                elif isinstance(e, BumperHit):
+                    traces[k].hits.append((e.tick, index[k][e.attacker_id], index[k][e.victim_id],
+                                           isinstance(e, CarDemolished)))
         record(t + 1)
     batch.close()
     return traces

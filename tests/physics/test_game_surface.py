@@ -4,8 +4,9 @@ import math
 import numpy as np
 import pytest
 
-from rocketdrl_ma.physics import (Arena, ArenaBatch, BallState, BallTouch, BoostPadState, BoostPickup, Bump,
-                                  CarControls, CarExtraState, CarState, Demo, DemoMode, MutatorConfig, yaw_rot_mat)
+from rocketdrl_ma.physics import (Arena, ArenaBatch, BallState, BallTouch, BoostPadState, BoostPadTaken, CarBumped,
+                                  CarControls, CarDemolished, CarExtraState, CarState, DemoMode, MutatorConfig,
+                                  yaw_rot_mat)
 from rocketdrl_ma.physics import constants as C
 
 UP_Y = math.pi / 2
@@ -50,8 +51,8 @@ def test_pad_state_pickup_event_and_cooldown(arena):
         small.set_state(BoostPadState(cooldown_s=-1.0))
     car.set_state(_grounded(x=big.pos[0], y=big.pos[1], boost=30.0))
     arena.step(1)
-    pickups = [e for e in arena.drain_events() if isinstance(e, BoostPickup)]
-    assert pickups == [BoostPickup(tick=arena.tick_count, arena=0, car_id=car.id, pad_index=big.index, amount=70.0)]
+    pickups = [e for e in arena.drain_events() if isinstance(e, BoostPadTaken)]
+    assert pickups == [BoostPadTaken(tick=arena.tick_count, arena=0, car_id=car.id, pad_index=big.index, amount=70.0)]
     assert big.get_state().cooldown_s == pytest.approx(C.BOOST_PAD_BIG_COOLDOWN)
     assert small.get_state().cooldown_s == pytest.approx(1.5 - 1 / 120)
     arena.set_boost_pad_timers(np.zeros(34))
@@ -96,22 +97,23 @@ def _bumper_hit(arena, attacker_team, speed, supersonic):
     events = []
     for _ in range(40):
         arena.step(1)
-        events += [e for e in arena.drain_events() if isinstance(e, (Bump, Demo))]
+        events += [e for e in arena.drain_events() if isinstance(e, (CarBumped, CarDemolished))]
         if events:
             break
     return attacker, victim, events
 
 
 @pytest.mark.parametrize("mode, team_demos, other_team, speed, supersonic, expect", [
-    (DemoMode.NORMAL, False, 1, 1400.0, False, Bump), (DemoMode.NORMAL, False, 1, 2290.0, True, Demo),
-    (DemoMode.NORMAL, False, 0, 2290.0, True, Bump), (DemoMode.NORMAL, True, 0, 2290.0, True, Demo),
-    (DemoMode.ON_CONTACT, False, 1, 1000.0, False, Demo), (DemoMode.DISABLED, False, 1, 2290.0, True, Bump)])
+    (DemoMode.NORMAL, False, 1, 1400.0, False, CarBumped), (DemoMode.NORMAL, False, 1, 2290.0, True, CarDemolished),
+    (DemoMode.NORMAL, False, 0, 2290.0, True, CarBumped), (DemoMode.NORMAL, True, 0, 2290.0, True, CarDemolished),
+    (DemoMode.ON_CONTACT, False, 1, 1000.0, False, CarDemolished),
+    (DemoMode.DISABLED, False, 1, 2290.0, True, CarBumped)])
 def test_demo_modes(arena, mode, team_demos, other_team, speed, supersonic, expect):
     arena.set_mutator_config(MutatorConfig(demo_mode=mode, team_demos=team_demos, respawn_delay_s=0.5))
     attacker, victim, events = _bumper_hit(arena, other_team, speed, supersonic)
     assert [(type(e), e.attacker_id, e.victim_id) for e in events] == [(expect, attacker.id, victim.id)]
-    assert victim.get_state().is_demoed == (expect is Demo)
-    if expect is Demo:
+    assert victim.get_state().is_demoed == (expect is CarDemolished)
+    if expect is CarDemolished:
         assert victim.get_state().demo_respawn_timer == pytest.approx(0.5, abs=1.01 / 120)
         arena.step(61)
         assert not victim.get_state().is_demoed

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from rocketdrl_ma.physics import Arena, BallState, Bump, CarControls, CarState, Demo, yaw_rot_mat
+from rocketdrl_ma.physics import Arena, BallState, CarBumped, CarControls, CarDemolished, CarState, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 
 AWAY_BALL = BallState(pos=np.array([2500.0, 3000.0, C.BALL_REST_Z]))
@@ -107,7 +107,7 @@ def test_supersonic_car_demolishes_an_opponent_and_it_respawns(arena):
         if victim.get_state().is_demoed:
             break
     assert victim.get_state().is_demoed
-    demos = [e for e in arena.drain_events() if isinstance(e, Demo)]
+    demos = [e for e in arena.drain_events() if isinstance(e, CarDemolished)]
     assert [(e.attacker_id, e.victim_id) for e in demos] == [(attacker.id, victim.id)]
     arena.step(int(C.DEMO_RESPAWN_TIME * 120) + 2)
     s = victim.get_state()
@@ -124,7 +124,7 @@ def test_slow_car_bumps_instead_of_demolishing(arena):
     bumps = []
     for _ in range(40):
         arena.step(1)
-        bumps += [e for e in arena.drain_events() if isinstance(e, Bump)]
+        bumps += [e for e in arena.drain_events() if isinstance(e, CarBumped)]
         if bumps:
             break
     arena.step(1)

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import rocketdrl_ma
-from rocketdrl_ma.physics import BallState, BallTouch, BoostPickup, CarControls, CarState, Demo, yaw_rot_mat
+from rocketdrl_ma.physics import (BallState, BallTouch, BoostPadTaken, CarControls, CarDemolished, CarState,
+                                  yaw_rot_mat)
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules import Match
 from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS, TeamMetrics, team_log_vector
@@ -164,7 +165,7 @@ def test_a_dribble_is_one_touch_and_events_of_other_kinds_count():
     agent_of = {0: "blue_0", 1: "blue_1", 2: "orange_0"}
     for tick in range(1, 200):  # blue_0 carries the ball for 200 ticks
         metrics.on_tick([_touch(tick, 0)], agent_of)
-    metrics.on_tick([Demo(300, 0, 2, 0), BoostPickup(300, 0, 1, 3, 55.5)], agent_of)
+    metrics.on_tick([CarDemolished(300, 0, 2, 0), BoostPadTaken(300, 0, 1, 3, 55.5)], agent_of)
     metrics.on_tick([_touch(320, 1)], agent_of)  # 121 ticks after blue_0 let go: a pass
     metrics.on_goal(0, "blue_1", 330)
     cars = {a: metrics.car_summary(a) for a in agent_of.values()}

@@ -97,7 +97,7 @@ def test_a_lobby_created_match_is_held_to_the_observation_budget(running):
 
 def test_the_observation_allow_list_is_a_server_setting(tmp_path):
     with pytest.raises(ValueError, match=r"limits.observations: \['eyes'\] are not observation builders; allowed: "
-                                         r"\['ray', 'seed_aerial'"):
+                                         r"\['aerial_sensors', 'barrier_sensors', 'general_sensors', 'ray', "):
         Limits.from_dict({"observations": ["seed_sensors", "eyes"]})
     with pytest.raises(ValueError, match="limits.max_observation_rays: expected an integer >= 0"):
         Limits.from_dict({"max_observation_rays": 2.5})

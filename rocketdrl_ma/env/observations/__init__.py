@@ -16,25 +16,32 @@ does the same (a proper rotation about z by pi maps ``(wx, wy, wz) -> (-wx, -wy,
 permuted to the pad at the mirrored position. A blue car at a state and the matching orange car at the
 mirrored state (teams swapped) get bit-identical observations.
 
-One family per module: ``base`` (the interface, scales, team frame), ``seed`` (``SeedSensors``, the RocketDRL
-seed's 12 general data sensors, and ``SeedBarrierSensors`` / ``SeedAerialSensors``, the seed sensors plus the
-Barrier and Aerial minigames' own), ``rays`` (``RaySensor``: a fan of distance rays with a hit class),
+One family per module: ``base`` (the interface, scales, team frame), ``sensors`` (``GeneralSensors``, 12 general
+data sensors of one car, and ``BarrierSensors`` / ``AerialSensors``, the general sensors plus the Barrier and Aerial
+minigames' own), ``rays`` (``RaySensor``: a fan of distance rays with a hit class),
 ``team_relative`` (``TeamRelativeObs``, the full state in the team frame, and ``BatchedTeamRelativeObs``, the
 same for every arena of a batch at once) and ``registry`` (``CombinedObs``, concatenation;
-``make_obs_builder("seed_sensors+ray")`` combines by name).
+``make_obs_builder("general_sensors+ray")`` combines by name). The old names (``seed_sensors``, ``SeedSensors``...)
+still work, with a warning naming the new one (``env.renamed``).
 """
 from __future__ import annotations
 
+from ..renamed import renamed_class
 from .base import (ARENA_DIAGONAL, BALL_ANG_VEL_SCALE, BALL_VEL_SCALE, CAR_ANG_VEL_SCALE, CAR_VEL_SCALE, MIRROR, N_PADS,
                    PAD_MIRROR, POS_SCALE, ObsBuilder, has_flip_available, team_sign)
 from .rays import RAY_CLASSES, RaySensor
 from .registry import OBS_BUILDERS, CombinedObs, make_obs_builder
-from .seed import SeedAerialSensors, SeedBarrierSensors, SeedSensors
+from .sensors import AerialSensors, BarrierSensors, GeneralSensors
 from .team_relative import (BALL_FEATURES, CAR_FEATURES, GAME_FEATURES, BatchedTeamRelativeObs, TeamRelativeObs,
                             car_features)
 
 __all__ = ["ARENA_DIAGONAL", "BALL_ANG_VEL_SCALE", "BALL_FEATURES", "BALL_VEL_SCALE", "CAR_ANG_VEL_SCALE",
            "CAR_FEATURES", "CAR_VEL_SCALE", "GAME_FEATURES", "MIRROR", "N_PADS", "OBS_BUILDERS", "PAD_MIRROR",
-           "POS_SCALE", "RAY_CLASSES", "BatchedTeamRelativeObs", "CombinedObs", "ObsBuilder", "RaySensor",
-           "SeedAerialSensors", "SeedBarrierSensors", "SeedSensors", "TeamRelativeObs", "car_features",
-           "has_flip_available", "make_obs_builder", "team_sign"]
+           "POS_SCALE", "RAY_CLASSES", "AerialSensors", "BarrierSensors", "BatchedTeamRelativeObs", "CombinedObs",
+           "GeneralSensors", "ObsBuilder", "RaySensor", "TeamRelativeObs", "car_features", "has_flip_available",
+           "make_obs_builder", "team_sign"]
+
+
+def __getattr__(name: str) -> type:
+    """The builders' old class names (``SeedSensors``...) still import, with a DeprecationWarning."""
+    return renamed_class(__name__, name, globals())

@@ -9,8 +9,9 @@ import numpy as np
 from gymnasium import spaces
 
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.physics.frames import TEAM_MIRROR, team_axis_sign
 from rocketdrl_ma.physics.state import CarState
-from rocketdrl_ma.rules.state import BLUE, GameState, agent_team
+from rocketdrl_ma.rules.state import GameState, agent_team
 
 POS_SCALE = np.array([C.ARENA_EXTENT_X, C.ARENA_EXTENT_Y + C.GOAL_DEPTH, C.ARENA_HEIGHT])  # to the goal's back
 #: The longest straight line in the arena (corner to corner, goal back to goal back): |car -> ball| <= this.
@@ -21,7 +22,7 @@ BALL_VEL_SCALE = C.BALL_MAX_SPEED
 BALL_ANG_VEL_SCALE = C.BALL_MAX_ANG_SPEED
 CLOCK_SCALE_S = 300.0  # a 5-minute match
 SCORE_DIFF_SCALE = 3.0  # tanh(diff / 3)
-MIRROR = np.array([-1.0, -1.0, 1.0])  # x -> -x, y -> -y: the half-turn about z that swaps the sides
+MIRROR = TEAM_MIRROR  # x -> -x, y -> -y: the half-turn about z that swaps the sides
 PAD_COOLDOWN = np.where(C.BOOST_PAD_IS_BIG, C.BOOST_PAD_BIG_COOLDOWN, C.BOOST_PAD_SMALL_COOLDOWN)
 
 
@@ -40,7 +41,7 @@ N_PADS = len(C.BOOST_PAD_POSITIONS)
 
 def team_sign(agent: str) -> np.ndarray:
     """The per-axis sign that takes a world vector into ``agent``'s team frame."""
-    return np.ones(3) if agent_team(agent) == BLUE else MIRROR
+    return team_axis_sign(agent_team(agent))
 
 
 def has_flip_available(car: CarState) -> bool:

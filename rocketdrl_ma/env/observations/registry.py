@@ -1,4 +1,4 @@
-"""Builders by name (``make_obs_builder("seed_sensors+ray")``) and their concatenation (``CombinedObs``)."""
+"""Builders by name (``make_obs_builder("general_sensors+ray")``) and their concatenation (``CombinedObs``)."""
 from __future__ import annotations
 
 import inspect
@@ -11,11 +11,12 @@ from rocketdrl_ma.rules.state import GameState
 
 from .base import ObsBuilder, box_space
 from .rays import RaySensor
-from .seed import SeedAerialSensors, SeedBarrierSensors, SeedSensors
+from ..renamed import OBSERVATION_NAMES, current_name
+from .sensors import AerialSensors, BarrierSensors, GeneralSensors
 from .team_relative import TeamRelativeObs
 
 class CombinedObs(ObsBuilder):
-    """The concatenation of several builders' observations, in order (e.g. seed sensors + rays)."""
+    """The concatenation of several builders' observations, in order (e.g. general sensors + rays)."""
 
     def __init__(self, builders: Sequence[ObsBuilder]):
         builders = list(builders)
@@ -36,11 +37,14 @@ class CombinedObs(ObsBuilder):
 
 
 OBS_BUILDERS: dict[str, type[ObsBuilder]] = {
-    "seed_sensors": SeedSensors, "ray": RaySensor, "team_relative": TeamRelativeObs,
-    "seed_barrier": SeedBarrierSensors, "seed_aerial": SeedAerialSensors}
+    "general_sensors": GeneralSensors, "ray": RaySensor, "team_relative": TeamRelativeObs,
+    "barrier_sensors": BarrierSensors, "aerial_sensors": AerialSensors}
+# The old names (``renamed.OBSERVATION_NAMES``) are still accepted, by configs and by server allow-lists.
+OBS_BUILDERS.update({old: OBS_BUILDERS[new] for old, new in OBSERVATION_NAMES.items()})
 
 
 def _construct(name: str, kwargs: dict) -> ObsBuilder:
+    name = current_name("observation", name, OBSERVATION_NAMES)
     if name not in OBS_BUILDERS:
         raise ValueError(f"observation: unknown observation builder {name!r}; allowed: {sorted(OBS_BUILDERS)} "
                          f"or several joined with '+'")
@@ -56,7 +60,7 @@ def make_obs_builder(name: str, **kwargs) -> ObsBuilder:
     """A builder by registry name, with its options: ``make_obs_builder("ray", n_rays=12)``.
 
     Several names joined with ``+`` build a ``CombinedObs`` in that order; each part's options then go in a
-    mapping under its name: ``make_obs_builder("seed_sensors+ray", ray={"n_rays": 12})``.
+    mapping under its name: ``make_obs_builder("general_sensors+ray", ray={"n_rays": 12})``.
     """
     if not isinstance(name, str):
         raise ValueError(f"observation: expected a builder name, got {name!r}")

@@ -15,7 +15,7 @@ the ball, every car, the pads and the clock, and their ``car_local`` features ad
 team-mate's own view of the ball (the ball in its car's frame), which is what decides whether it, not this car,
 gets to the ball first. The learner's batch already holds every team-mate's observation (the rows of an env copy
 are its cars), so the rollout workers, the env and the checkpoints' actor stay as they are; with an observation
-that sees less than everything (``rays``, ``seed_sensors``) the central input is also more information.
+that sees less than everything (``rays``, ``general_sensors``) the central input is also more information.
 """
 from __future__ import annotations
 

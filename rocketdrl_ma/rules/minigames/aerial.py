@@ -25,7 +25,7 @@ class Aerial(ShotMinigame):
     (``goal_not_counted``). **Extra miss**: ``ball_on_ground``, the released ball reaches the floor before any
     aerial touch. After the aerial touch the ball may bounce and roll in: that goal counts.
 
-    ``GameState.mode_state`` carries the sensors' flags (``seed_aerial``): ``ball_frozen``, ``release_in_s``,
+    ``GameState.mode_state`` carries the sensors' flags (``aerial_sensors``): ``ball_frozen``, ``release_in_s``,
     ``release_after_s``, and per agent ``aerial_touch_done`` and ``touch_waiting_reset`` (touched the ball
     and not back on the ground since). ``difficulty`` narrows the ranges to the lowest, nearest, centred ball.
 

@@ -1,5 +1,6 @@
-"""The RocketDRL seed's sensors: its 12 general data sensors (``seed_sensors``) and the Barrier and Aerial
-minigames' own (``seed_barrier``, ``seed_aerial``)."""
+"""Compact sensors: 12 general data sensors of one car (``general_sensors``), and the Barrier and Aerial
+minigames' own on top of them (``barrier_sensors``, ``aerial_sensors``), as the predecessor project (the RocketDRL
+seed) defined them."""
 from __future__ import annotations
 
 import math
@@ -13,8 +14,8 @@ from rocketdrl_ma.rules.state import ATTACKED_GOAL_MOUTH, GameState
 
 from .base import ARENA_DIAGONAL, ObsBuilder, box_space, check_sizes, clip_to_space, team_sign
 
-class SeedSensors(ObsBuilder):
-    """The RocketDRL seed paper's 12 general data sensors (18 numbers; 15 without the goal sensor).
+class GeneralSensors(ObsBuilder):
+    """12 general data sensors of one car (18 numbers; 15 without the goal sensor), the RocketDRL seed paper's.
 
     ====== ================ ======================================================================== =========
     index  sensor           value                                                                    range
@@ -81,13 +82,13 @@ class SeedSensors(ObsBuilder):
         return clip_to_space(out, self._space)
 
 
-class SeedBarrierSensors(ObsBuilder):
-    """``SeedSensors`` plus the seed's Barrier sensor (21 numbers; 18 without the goal sensor).
+class BarrierSensors(ObsBuilder):
+    """``GeneralSensors`` plus the Barrier sensor (21 numbers; 18 without the goal sensor).
 
     ====== ================== ==================================================================== =======
     index  sensor             value                                                                range
     ====== ================== ==================================================================== =======
-    0-17   general            ``SeedSensors``                                                      above
+    0-17   general            ``GeneralSensors``                                                      above
     18-20  barrier -> ball    ball - centre of the first ``state.obstacles`` box, team frame,      [-1, 1]
                               / ARENA_DIAGONAL; zeros when there is no barrier
     ====== ================== ==================================================================== =======
@@ -96,7 +97,7 @@ class SeedBarrierSensors(ObsBuilder):
     """
 
     def __init__(self, goal_sensor: bool = True):
-        self.general = SeedSensors(goal_sensor)
+        self.general = GeneralSensors(goal_sensor)
         self.size = self.general.size + 3
         g = self.general.space(1, 0)
         self._space = box_space(np.concatenate([g.low, [-1.0] * 3]), np.concatenate([g.high, [1.0] * 3]))
@@ -112,13 +113,13 @@ class SeedBarrierSensors(ObsBuilder):
         return clip_to_space(np.concatenate([self.general.build(agent, state), extra]), self._space)
 
 
-class SeedAerialSensors(ObsBuilder):
-    """``SeedSensors`` plus the seed's Aerial sensors (22 numbers; 19 without the goal sensor).
+class AerialSensors(ObsBuilder):
+    """``GeneralSensors`` plus the Aerial sensors (22 numbers; 19 without the goal sensor).
 
     ====== ================== ==================================================================== =======
     index  sensor             value                                                                range
     ====== ================== ==================================================================== =======
-    0-17   general            ``SeedSensors``                                                      above
+    0-17   general            ``GeneralSensors``                                                      above
     18     ball frozen        the ball still hangs where it was placed (``mode_state["ball_frozen"]``) {0, 1}
     19     release countdown  seconds until the ball is released / the release delay                [0, 1]
     20     aerial touch done  this agent made this round's valid aerial touch                       {0, 1}
@@ -130,7 +131,7 @@ class SeedAerialSensors(ObsBuilder):
     """
 
     def __init__(self, goal_sensor: bool = True):
-        self.general = SeedSensors(goal_sensor)
+        self.general = GeneralSensors(goal_sensor)
         self.size = self.general.size + 4
         g = self.general.space(1, 0)
         self._space = box_space(np.concatenate([g.low, [0.0] * 4]), np.concatenate([g.high, [1.0] * 4]))
