@@ -92,8 +92,9 @@ def _run_curve(args: argparse.Namespace) -> int:
 
     with ResultsStore(out / "results.sqlite") as store:
         rated: list = []
+        trainer_gone = False
         while True:
-            snapshots = (run_snapshots(Path(args.run_dir)) if args.run_dir
+            snapshots = (run_snapshots(Path(args.run_dir), args.final) if args.run_dir
                          else [read_snapshot(Path(p)) for p in args.checkpoints])
             play_snapshots(cfg, snapshots, store, out, args.workers, at_once, on_result=show)
             points = rating_curve(cfg, snapshots, store)
@@ -108,9 +109,23 @@ def _run_curve(args: argparse.Namespace) -> int:
                           f"[{p.low:6.2f}, {p.high:6.2f}]  points/match: {vs}", flush=True)
                 print(f"curve: {out / 'curve.png'}, {out / 'curve.json'}, TensorBoard {out / 'tensorboard'}",
                       flush=True)
-            if not args.follow or any(s.name == "final" for s in snapshots):
+            if not args.follow or any(s.name == "final" for s in snapshots) or trainer_gone:
                 return 0
             time.sleep(args.poll_s)
+            # a training that died writes no final checkpoint: rate what it left, once more, then stop
+            trainer_gone = args.follow_pid is not None and not _alive(args.follow_pid)
+
+
+def _alive(pid: int) -> bool:
+    import os
+
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process of that number: alive, only not ours to signal
+        pass
+    return True
 
 
 def _run_league_bot(args: argparse.Namespace) -> int:
@@ -175,6 +190,10 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--follow", action="store_true",
                    help="keep rating the run's new snapshots as training writes them, until its final.pt is rated")
     c.add_argument("--poll-s", type=float, default=60.0, help="--follow: seconds between looks for new snapshots")
+    c.add_argument("--final", default=None, metavar="PT",
+                   help="the run's final checkpoint, the curve's last point (default RUN_DIR/final.pt)")
+    c.add_argument("--follow-pid", type=int, default=None, metavar="PID",
+                   help="--follow: the training's process; once it is gone, rate what it left and stop")
     c.add_argument("--pin-anchors", action="store_true",
                    help="play the anchors' round robin and print their ratings to pin in the config")
     c.add_argument("--workers", type=int, default=0, help="share the matches among this many processes")

@@ -60,13 +60,14 @@ def read_snapshot(path: Path, name: str | None = None) -> Snapshot:
                     None if seconds is None else float(seconds) / 3600.0)
 
 
-def run_snapshots(run_dir: Path) -> list[Snapshot]:
-    """A training run's snapshots (``snapshots/step_*.pt``) and its ``final.pt`` once written, by step."""
+def run_snapshots(run_dir: Path, final: Path | None = None) -> list[Snapshot]:
+    """A training run's snapshots (``snapshots/step_*.pt``) and its final checkpoint (``final``, default
+    ``final.pt`` in the run's folder) once written, by step."""
     found = [read_snapshot(p) for p in Path(run_dir, "snapshots").glob("step_*[0-9].pt")]
-    final = Path(run_dir, "final.pt")
+    final = Path(run_dir, "final.pt") if final is None else Path(final)
     if final.is_file() and final.with_suffix(".json").is_file():
-        found.append(read_snapshot(final))
-    return sorted(found, key=lambda s: (s.agent_steps, s.name != "final"))
+        found.append(read_snapshot(final, "final"))
+    return sorted(found, key=lambda s: (s.agent_steps, s.name == "final"))
 
 
 def snapshot_matches(cfg: CurveConfig, snapshot: Snapshot) -> list[ScheduledMatch]:

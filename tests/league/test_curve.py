@@ -152,3 +152,35 @@ def test_pin_anchors_prints_a_config_that_loads(tmp_path):
     pinned = validate_curve_config({**raw, **printed})
     assert pinned.pinned
     assert pinned.anchor("chaser").mu > pinned.anchor("idle").mu
+
+
+def test_a_training_with_a_rating_curve_rates_its_snapshots_and_final_in_the_background(tmp_path):
+    """`train --rating-curve` starts `league-curve --follow` beside a real (tiny) 2v2 self-play run from a random
+    network; the curve ends with the run's final checkpoint, with the training hours the snapshots recorded."""
+    from rocketdrl_ma.policies.ppo import load_train_config
+
+    steps = 64 * 2 * 4  # one iteration: 64 decisions of 2 games of 4 cars
+    cfg = load_train_config("policies/selfplay_2v2_scratch.yaml").to_mapping()
+    cfg = {**cfg, "env_overrides": {**cfg["env_overrides"], "clock_s": 4.0}, "n_envs": 2, "n_workers": 0,
+           "buffer_size": steps, "batch_size": steps // 2, "num_epoch": 1, "hidden_units": 32,
+           "max_steps": 2 * steps, "summary_freq": steps, "checkpoint_interval": steps,
+           "selfplay": {**cfg["selfplay"], "snapshot_interval": steps}}
+    train_yaml, curve_yaml = tmp_path / "train.yaml", tmp_path / "curve.yaml"
+    train_yaml.write_text(json.dumps(cfg))
+    curve_yaml.write_text(yaml.safe_dump(curve(matches_per_anchor=1)))
+    run = tmp_path / "run"
+    trained = subprocess.run([sys.executable, "-m", "rocketdrl_ma.cli", "train", str(train_yaml), "--run-dir",
+                              str(run), "--quiet", "--rating-curve", str(curve_yaml)], cwd=REPO,
+                             capture_output=True, text=True, timeout=900)
+    assert trained.returncode == 0, trained.stdout + trained.stderr
+    assert "rating curve: rating the final checkpoint in the background" in trained.stdout
+    curve_json = run / "rating_curve" / "curve.json"
+    deadline = time.monotonic() + 900  # a guard against a hang, not a speed check
+    while not (curve_json.is_file() and json.loads(curve_json.read_text())[-1]["snapshot"] == "final"):
+        assert time.monotonic() < deadline, (run / "rating_curve.log").read_text()
+        time.sleep(1.0)
+    points = json.loads(curve_json.read_text())
+    assert [(p["snapshot"], p["agent_steps"]) for p in points] == [
+        ("step_512", steps), ("step_1024", 2 * steps), ("final", 2 * steps)]
+    assert all(p["train_hours"] > 0 for p in points)
+    assert all(p["matches"] == 2 for p in points)
