@@ -3,14 +3,15 @@
 A config names a game mode (``mode``), the mode's own parameters (its constructor arguments, e.g.
 ``team_size`` and ``clock_s`` for a match) and the env's (``tick_skip``, ``max_cycles``,
 ``observation``, ``action``, ``rewards``). Unknown keys and wrong types are errors naming the key and
-the allowed ones; nothing is silently dropped or clamped.
+the allowed ones; nothing is silently dropped or clamped. The env's keys are the typed fields of ``EnvKeys``; a
+mode's are its constructor's parameters, typed by their defaults; both are checked by ``rocketdrl_ma.validation``.
 """
 from __future__ import annotations
 
+import dataclasses
 import inspect
-import math
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import yaml
 
@@ -19,7 +20,7 @@ from rocketdrl_ma.physics.arena_shape import arena_shape_index
 from rocketdrl_ma.rules import GAME_MODES
 from rocketdrl_ma.rules.match import check_team_size
 from rocketdrl_ma.rules.rewards import check_weights
-from rocketdrl_ma.validation import reject_unknown
+from rocketdrl_ma.validation import Check, OneOf, Range, check_number, check_value, field_types, reject_unknown
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 REPO_ROOT = PACKAGE_DIR.parent
@@ -29,15 +30,31 @@ SHIPPED_FOLDERS = ("matches", "minigames", "server", "policies", "leagues")
 #: Where a wheel carries them (``setup.py`` copies them there at build time).
 WHEEL_DATA_DIR = PACKAGE_DIR / "data"
 
-ENV_DEFAULTS: dict[str, Any] = {
-    "tick_skip": 8,
-    "max_cycles": None,
-    "observation": "team_relative",
-    "action": "continuous",
-    "rewards": {},
-    "info_format": "full",
-}
 INFO_FORMATS = ("full", "numeric")
+
+
+def _builder_spec(field: str, spec: Any) -> dict[str, Any]:
+    """An observation or action spec as ``{name, **options}``."""
+    if isinstance(spec, str):
+        return {"name": spec}
+    if not (isinstance(spec, dict) and isinstance(spec.get("name"), str)):
+        raise ValueError(f"{field}: expected a name or a mapping with 'name' and its options, got {spec!r}")
+    return spec
+
+
+@dataclasses.dataclass(frozen=True)
+class EnvKeys:
+    """The keys every game config has besides its mode's (``rewards`` is checked against the mode's terms)."""
+    tick_skip: Annotated[int, Range(minimum=1)] = 8
+    max_cycles: Annotated[int, Range(minimum=1)] | None = None
+    observation: Annotated[Any, Check(_builder_spec)] = "team_relative"
+    action: Annotated[Any, Check(_builder_spec)] = "continuous"
+    rewards: Any = dataclasses.field(default_factory=dict)
+    info_format: Annotated[str, OneOf(INFO_FORMATS)] = "full"
+
+
+ENV_DEFAULTS: dict[str, Any] = {f.name: f.default if f.default is not dataclasses.MISSING else f.default_factory()
+                                for f in dataclasses.fields(EnvKeys)}
 
 
 def shipped_root() -> Path | None:
@@ -127,8 +144,8 @@ def _check_type(key: str, value: Any, default: Any) -> None:
         ok = True
     if not ok:
         raise ValueError(f"{key}: expected {expected.__name__}, got {type(value).__name__} {value!r}")
-    if expected is float and not math.isfinite(value):  # YAML's .inf and .nan: no clock or limit is endless
-        raise ValueError(f"{key}: expected a finite number, got {value!r}")
+    if expected is float:  # YAML's .inf and .nan: no clock or limit is endless
+        check_number(key, value)
 
 
 def load_config(config: str | Path | dict | None = None, overrides: dict | None = None) -> dict[str, Any]:
@@ -156,11 +173,14 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
     allowed = {"mode", *ENV_DEFAULTS, *params}
     reject_unknown(f"config (mode {mode!r})", raw, allowed)
     cfg: dict[str, Any] = {"mode": mode}
+    env_types = field_types(EnvKeys)
     for key, default in {**ENV_DEFAULTS, **params}.items():
         value = raw.get(key, default)
         if value is inspect.Parameter.empty:
             raise ValueError(f"{key}: required for mode {mode!r}")
-        if key not in ("observation", "action", "rewards", "arena_shape"):  # these four checked below
+        if key in env_types:
+            value = check_value(key, value, env_types[key])
+        elif key != "arena_shape":  # checked below
             _check_type(key, value, default)
         cfg[key] = value
     if "team_size" in cfg:  # the sides of a match, named as the config names them (not as the rules call them)
@@ -171,19 +191,7 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         arena_shape_index(cfg["arena_shape"])  # a ValueError naming the field and the shapes
     if "car_preset" in cfg and cfg["car_preset"] not in PRESETS:
         raise ValueError(f"car_preset: unknown car preset {cfg['car_preset']!r}; allowed: {sorted(PRESETS)}")
-    if not isinstance(cfg["tick_skip"], int) or cfg["tick_skip"] < 1:
-        raise ValueError(f"tick_skip: must be an int >= 1, got {cfg['tick_skip']!r}")
-    if cfg["max_cycles"] is not None and (not isinstance(cfg["max_cycles"], int) or cfg["max_cycles"] < 1):
-        raise ValueError(f"max_cycles: must be an int >= 1 or null, got {cfg['max_cycles']!r}")
-    if cfg["info_format"] not in INFO_FORMATS:
-        raise ValueError(f"info_format: {cfg['info_format']!r} is not one of {list(INFO_FORMATS)}")
     cfg["rewards"] = check_weights(GAME_MODES[mode].REWARD_TERMS, cfg["rewards"], "rewards")
-    for key in ("observation", "action"):
-        spec = cfg[key]
-        if isinstance(spec, str):
-            cfg[key] = {"name": spec}
-        elif not (isinstance(spec, dict) and isinstance(spec.get("name"), str)):
-            raise ValueError(f"{key}: expected a name or a mapping with 'name' and its options, got {spec!r}")
     return cfg
 
 

@@ -22,6 +22,13 @@ def _run_web(args: argparse.Namespace) -> int:
         settings = None if args.no_zenoh else _client_settings(args)
         make_feed = None if settings is None else (lambda: SpectatorFeed(settings))
         library = ReplayLibrary(args.replays if args.replays is not None else ["runs"], args.replay or [])
+        league = None
+        if args.league:
+            import tempfile
+
+            from rocketdrl_ma.web.league import LeagueView
+            league = LeagueView(args.league, Path(tempfile.mkdtemp(prefix="league-replays-")))
+            library.folders.append(league.replay_dir)
         opponents = None
         if args.play:
             from rocketdrl_ma.web.play import opponent_choices
@@ -34,7 +41,7 @@ def _run_web(args: argparse.Namespace) -> int:
             opponents = opponent_choices(args.opponent or [])
         server = PageServer(make_feed, library, host=args.host, port=args.port, max_rate=args.max_rate,
                             node_modules=Path(args.node_modules) if args.node_modules else None,
-                            play_opponents=opponents)
+                            play_opponents=opponents, league=league)
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -43,6 +50,7 @@ def _run_web(args: argparse.Namespace) -> int:
         where = "no Zenoh" if settings is None else \
             f"match server {settings.server!r} via {list(settings.zenoh.connect)} as {settings.user_name}"
         where += "; play on" if opponents is not None else ""
+        where += f"; league {league.cfg.name!r} at {s.url()}league" if league is not None else ""
         print(f"page at {s.url()} ({where}; replays from {[str(f) for f in library.folders + library.files]})",
               flush=True)
 
@@ -68,5 +76,8 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
                         "(loopback only; creating needs the server's admin secret, found from its folder)")
     w.add_argument("--opponent", action="append", default=None,
                    help="a checkpoint:PATH the page may play against (repeatable; scripted bots are offered anyway)")
+    w.add_argument("--league", default=None,
+                   help="a league config (LEAGUE.yaml): its standings, ratings, payoff matrix and match replays, "
+                        "read from the results store it names, at /league")
     w.add_argument("--node-modules", default=None, help="where `npm ci` installed three.js (default: the repo's)")
     w.set_defaults(run=_run_web)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 from gymnasium import spaces
 
@@ -14,7 +14,7 @@ from rocketdrl_ma.env.actions import make_action_parser
 from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.policies.fixed_team import FixedTeamEnv
-from rocketdrl_ma.validation import as_mapping, check_int
+from rocketdrl_ma.validation import Expect, Range, as_mapping, checked_fields
 
 #: the team ``opponent`` plays
 OPPONENT_TEAM = "orange"
@@ -33,23 +33,17 @@ SHIPPED_GAMES = {
 class RocketDRLTaskConfig:
     """What a BenchMARL task of this env is made of (``rocketdrl_ma.integrations.benchmarl`` describes each key)."""
 
-    config: str = "matches/1v1.yaml"
-    max_cycles: int = 300
+    config: Annotated[str | Path, Expect("a match or minigame YAML path")] = "matches/1v1.yaml"
+    max_cycles: Annotated[int, Range(minimum=1)] = 300
     overrides: dict[str, Any] = field(default_factory=dict)
-    opponent: str | None = None
+    opponent: Annotated[str | None, Expect("a policy such as 'scripted:ball_chaser' or null")] = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.config, (str, Path)):
-            raise ValueError(f"task config: expected a match or minigame YAML path, got {self.config!r}")
+        vars(self).update(checked_fields(self, "task "))
         self.config = str(self.config)
-        check_int("task max_cycles", self.max_cycles, minimum=1)
-        self.overrides = as_mapping("task overrides", self.overrides)
         for key, by in SET_BY_THE_TASK.items():
             if key in self.overrides:
                 raise ValueError(f"task overrides: {key!r} is set by the task ({by}); remove it")
-        if self.opponent is not None and not isinstance(self.opponent, str):
-            raise ValueError(f"task opponent: expected a policy such as 'scripted:ball_chaser' or null, got "
-                             f"{self.opponent!r}")
         # a bad game config fails here, naming the key, not in BenchMARL's first rollout
         make_obs_builder(**self.env_config()["observation"])
         self.action_space()

@@ -21,33 +21,57 @@ members are one player each, rated as a team in the matches they play together.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import functools
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 from rocketdrl_ma.config import load_config, load_yaml_file, resolve_shipped_path
-from rocketdrl_ma.validation import check_int, check_name, reject_unknown
+from rocketdrl_ma.validation import Check, Expect, Name, OneOf, Range, load_dataclass
 
-LEAGUE_KEYS = ("name", "match", "overrides", "format", "rounds", "matches_per_pair", "seed", "results", "report",
-               "server", "entrants")
 FORMATS = ("round_robin", "per_pair")
-ENTRANT_KEYS = ("name", "policy", "members", "remote")
-SERVER_KEYS = ("name", "connect", "mode", "deadline_ms", "join_timeout_s")
+POLICY_SPEC = "a policy spec like 'scripted:ball_chaser' or 'checkpoint:PATH'"
+ENDPOINTS = "a list of Zenoh endpoints like 'tcp/127.0.0.1:7447'"
+
+
+def _check_policy_spec(field_name: str, spec: str) -> str:
+    if ":" not in spec:
+        raise ValueError(f"{field_name}: expected {POLICY_SPEC}, got {spec!r}")
+    return spec
+
+
+def _check_some(field_name: str, endpoints: tuple[str, ...]) -> tuple[str, ...]:
+    if not endpoints:
+        raise ValueError(f"{field_name}: expected {ENDPOINTS}, got []")
+    return endpoints
+
+
+PolicySpec = Annotated[str, Expect(POLICY_SPEC), Check(_check_policy_spec)]
+PathText = Annotated[str, Expect("a path")]
+AboveZero = Annotated[float, Range(above=0.0), Expect("a number > 0")]
 
 
 @dataclass(frozen=True)
 class Player:
-    """One rated player: a policy spec, or a remote bot (``policy`` None)."""
-    name: str
-    policy: str | None
+    """One rated player: a team entrant's member (``{name, policy}``), or an entrant that drives every car of its
+    team alone."""
+    name: Name
+    policy: PolicySpec | None
+    """the policy spec; None: a remote bot"""
 
 
 @dataclass(frozen=True)
 class Entrant:
-    """A side of a match. ``players`` has one player who drives every car, or one per car (a team)."""
-    name: str
-    players: tuple[Player, ...]
+    """A side of a match: exactly one of ``policy`` (one player drives every car), ``members`` (one player per car,
+    a team) or ``remote: true`` (a bot waiting on the match server)."""
+    name: Name
+    policy: PolicySpec | None = None
+    members: tuple[Player, ...] | None = None
     remote: bool = False
+
+    @property
+    def players(self) -> tuple[Player, ...]:
+        return self.members if self.members else (Player(self.name, self.policy),)
 
     def slot_players(self, team_size: int) -> list[Player]:
         """The player driving each of the team's cars, in slot order."""
@@ -57,28 +81,80 @@ class Entrant:
 @dataclass(frozen=True)
 class ServerLink:
     """How the league reaches the match server that remote entrants play on."""
-    name: str = "local"
-    connect: tuple[str, ...] = ("tcp/127.0.0.1:7447",)
-    mode: str = "lockstep"
-    deadline_ms: float = 200.0
-    join_timeout_s: float = 60.0
+    name: Name = "local"
+    connect: Annotated[tuple[str, ...], Expect(ENDPOINTS), Check(_check_some)] = ("tcp/127.0.0.1:7447",)
+    mode: Annotated[str, OneOf(("lockstep", "realtime"))] = "lockstep"
+    deadline_ms: AboveZero = 200.0
+    join_timeout_s: AboveZero = 60.0
 
 
 @dataclass(frozen=True)
 class LeagueConfig:
-    name: str
-    match: str
-    overrides: dict
-    format: str
-    rounds: int
-    matches_per_pair: int
-    seed: int
-    results: str
-    report: str
-    server: ServerLink
-    entrants: tuple[Entrant, ...]
-    team_size: int
-    game_config: dict
+    """A league YAML's keys (the module docstring shows one); ``game_config`` and ``team_size`` follow from
+    ``match`` and ``overrides``."""
+    name: Name
+    match: Annotated[str, Expect("the path of a match YAML like 'matches/1v1.yaml'")]
+    entrants: Annotated[tuple[Entrant, ...], Expect("a list of at least 2 entrants")]
+    overrides: Annotated[dict, Expect("a mapping of match config keys")] | None = None
+    format: Annotated[str, OneOf(FORMATS)] = "round_robin"
+    rounds: Annotated[int, Range(minimum=1)] = 1
+    matches_per_pair: Annotated[int, Range(minimum=1)] = 2
+    seed: int = 0
+    results: PathText | None = None
+    """default ``runs/league/<name>.sqlite``"""
+    report: PathText | None = None
+    """default ``runs/league/<name>``"""
+    server: ServerLink = field(default_factory=ServerLink)
+
+    def __post_init__(self) -> None:  # the defaults that depend on the league's name
+        object.__setattr__(self, "overrides", self.overrides or {})
+        object.__setattr__(self, "results", self.results or f"runs/league/{self.name}.sqlite")
+        object.__setattr__(self, "report", self.report or f"runs/league/{self.name}")
+
+    @functools.cached_property
+    def game_config(self) -> dict[str, Any]:
+        return load_config(self.match, self.overrides)
+
+    @property
+    def team_size(self) -> int:
+        return int(self.game_config["team_size"] if self.game_config.get("blue_size") is None
+                   else self.game_config["blue_size"])
+
+    def check(self) -> None:
+        game_config = self.game_config
+        if game_config.get("mode") != "match":
+            raise ValueError(f"match: {self.match} is a {game_config.get('mode')!r} config; a league needs mode "
+                             "'match'")
+        sizes = [game_config[key] if game_config.get(key) is not None else game_config["team_size"]
+                 for key in ("blue_size", "orange_size")]
+        if sizes[0] != sizes[1]:
+            raise ValueError(f"blue_size/orange_size: a league plays every pair on both sides, so its match needs "
+                             f"teams of one size; got {sizes[0]}v{sizes[1]} (set team_size only)")
+        if len(self.entrants) < 2:
+            raise ValueError(f"entrants: expected a list of at least 2 entrants, got {len(self.entrants)}")
+        for i, entrant in enumerate(self.entrants):
+            self._check_entrant(f"entrants[{i}]", entrant)
+        names = [e.name for e in self.entrants]
+        if len(set(names)) != len(names):
+            raise ValueError(f"entrants: names must be unique, got {names}")
+        players: dict[str, str | None] = {}
+        for entrant in self.entrants:
+            for player in entrant.players:
+                if players.setdefault(player.name, player.policy) != player.policy:
+                    raise ValueError(f"entrants: player {player.name!r} appears with two policies "
+                                     f"({players[player.name]!r} and {player.policy!r})")
+
+    def _check_entrant(self, where: str, entrant: Entrant) -> None:
+        kinds = [k for k in ("policy", "members", "remote") if getattr(entrant, k) not in (None, False)]
+        if len(kinds) != 1:
+            raise ValueError(f"{where} ({entrant.name}): needs exactly one of policy, members, remote: true; got "
+                             f"{kinds}")
+        if entrant.members is not None and len(entrant.members) != self.team_size:
+            raise ValueError(f"{where}.members: expected a list of {self.team_size} players (the match's "
+                             f"team_size), got {len(entrant.members)}")
+        for k, member in enumerate(entrant.members or ()):
+            if member.policy is None:
+                raise ValueError(f"{where}.members[{k}].policy: expected {POLICY_SPEC}, got None")
 
     def entrant(self, name: str) -> Entrant:
         return next(e for e in self.entrants if e.name == name)
@@ -92,111 +168,8 @@ class LeagueConfig:
         return list(seen.values())
 
 
-def _player(where: str, d: Any) -> Player:
-    if not isinstance(d, dict):
-        raise ValueError(f"{where}: expected a mapping with name and policy, got {d!r}")
-    reject_unknown(where, d, ("name", "policy"))
-    policy = d.get("policy")
-    if not isinstance(policy, str) or ":" not in policy:
-        raise ValueError(f"{where}.policy: expected a policy spec like 'scripted:ball_chaser' or "
-                         f"'checkpoint:PATH', got {policy!r}")
-    return Player(check_name(f"{where}.name", d.get("name")), policy)
-
-
-def _entrant(i: int, d: Any, team_size: int) -> Entrant:
-    where = f"entrants[{i}]"
-    if not isinstance(d, dict):
-        raise ValueError(f"{where}: expected a mapping with name and one of policy/members/remote, got {d!r}")
-    reject_unknown(where, d, ENTRANT_KEYS)
-    name = check_name(f"{where}.name", d.get("name"))
-    kinds = [k for k in ("policy", "members", "remote") if d.get(k) not in (None, False)]
-    if len(kinds) != 1:
-        raise ValueError(f"{where} ({name}): needs exactly one of policy, members, remote: true; got {kinds}")
-    if kinds == ["remote"]:
-        if d["remote"] is not True:
-            raise ValueError(f"{where}.remote: expected true, got {d['remote']!r}")
-        return Entrant(name, (Player(name, None),), remote=True)
-    if kinds == ["policy"]:
-        return Entrant(name, (_player(where, {"name": name, "policy": d["policy"]}),))
-    members = d["members"]
-    if not isinstance(members, list) or len(members) != team_size:
-        raise ValueError(f"{where}.members: expected a list of {team_size} players (the match's team_size), "
-                         f"got {members!r}")
-    return Entrant(name, tuple(_player(f"{where}.members[{k}]", m) for k, m in enumerate(members)))
-
-
 def validate_league_config(raw: Any) -> LeagueConfig:
-    if not isinstance(raw, dict):
-        raise ValueError(f"league config: expected a mapping, got {type(raw).__name__}")
-    reject_unknown("league config", raw, LEAGUE_KEYS)
-    name = check_name("name", raw.get("name"))
-    match = raw.get("match")
-    if not isinstance(match, str):
-        raise ValueError(f"match: expected the path of a match YAML like 'matches/1v1.yaml', got {match!r}")
-    overrides = raw.get("overrides", {}) or {}
-    if not isinstance(overrides, dict):
-        raise ValueError(f"overrides: expected a mapping of match config keys, got {overrides!r}")
-    game_config = load_config(match, overrides)
-    if game_config.get("mode") != "match":
-        raise ValueError(f"match: {match} is a {game_config.get('mode')!r} config; a league needs mode 'match'")
-    sizes = [game_config[key] if game_config.get(key) is not None else game_config["team_size"]
-             for key in ("blue_size", "orange_size")]
-    if sizes[0] != sizes[1]:
-        raise ValueError(f"blue_size/orange_size: a league plays every pair on both sides, so its match needs "
-                         f"teams of one size; got {sizes[0]}v{sizes[1]} (set team_size only)")
-    team_size = int(sizes[0])
-    fmt = raw.get("format", "round_robin")
-    if fmt not in FORMATS:
-        raise ValueError(f"format: {fmt!r} is not one of {list(FORMATS)}")
-    rounds = check_int("rounds", raw.get("rounds", 1), minimum=1)
-    per_pair = check_int("matches_per_pair", raw.get("matches_per_pair", 2), minimum=1)
-    seed = raw.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int):
-        raise ValueError(f"seed: expected an int, got {seed!r}")
-    for key in ("results", "report"):
-        if not isinstance(raw.get(key, ""), str):
-            raise ValueError(f"{key}: expected a path, got {raw[key]!r}")
-    entrants_raw = raw.get("entrants")
-    if not isinstance(entrants_raw, list) or len(entrants_raw) < 2:
-        raise ValueError(f"entrants: expected a list of at least 2 entrants, got {entrants_raw!r}")
-    entrants = tuple(_entrant(i, d, team_size) for i, d in enumerate(entrants_raw))
-    names = [e.name for e in entrants]
-    if len(set(names)) != len(names):
-        raise ValueError(f"entrants: names must be unique, got {names}")
-    players: dict[str, str | None] = {}
-    for entrant in entrants:
-        for player in entrant.players:
-            if players.setdefault(player.name, player.policy) != player.policy:
-                raise ValueError(f"entrants: player {player.name!r} appears with two policies "
-                                 f"({players[player.name]!r} and {player.policy!r})")
-    return LeagueConfig(name=name, match=match, overrides=overrides, format=fmt, rounds=rounds,
-                        matches_per_pair=per_pair, seed=seed,
-                        results=raw.get("results", f"runs/league/{name}.sqlite"),
-                        report=raw.get("report", f"runs/league/{name}"), server=_server(raw.get("server")),
-                        entrants=entrants, team_size=team_size, game_config=game_config)
-
-
-def _server(d: Any) -> ServerLink:
-    if d is None:
-        return ServerLink()
-    if not isinstance(d, dict):
-        raise ValueError(f"server: expected a mapping with {list(SERVER_KEYS)}, got {d!r}")
-    reject_unknown("server", d, SERVER_KEYS)
-    connect = d.get("connect", ServerLink.connect)
-    if not isinstance(connect, (list, tuple)) or not connect or not all(isinstance(c, str) for c in connect):
-        raise ValueError(f"server.connect: expected a list of Zenoh endpoints like 'tcp/127.0.0.1:7447', "
-                         f"got {connect!r}")
-    mode = d.get("mode", "lockstep")
-    if mode not in ("lockstep", "realtime"):
-        raise ValueError(f"server.mode: {mode!r} is not one of ['lockstep', 'realtime']")
-    out = {}
-    for key in ("deadline_ms", "join_timeout_s"):
-        value = d.get(key, getattr(ServerLink, key))
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or value <= 0:
-            raise ValueError(f"server.{key}: expected a number > 0, got {value!r}")
-        out[key] = float(value)
-    return ServerLink(name=check_name("server.name", d.get("name", "local")), connect=tuple(connect), mode=mode,
-                      **out)
+    return load_dataclass(LeagueConfig, raw, "league config")
 
 
 def load_league_config(path: str | Path, overrides: dict | None = None) -> LeagueConfig:

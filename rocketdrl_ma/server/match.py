@@ -36,6 +36,9 @@ from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations
 
 log = logging.getLogger(__name__)
 REALTIME_TICK_HZ = 120.0
+#: real-time matches publish their state every this many ticks (60 Hz), not only at decisions: a human's page draws
+#: the car's response to a key one state sooner
+REALTIME_STATE_TICKS = 2
 INTERNAL_ERROR = "internal error (details in the server's log)"
 _MAX_SPEC_NAME = 64
 
@@ -506,6 +509,9 @@ class MatchRunner:
                 self._publish(observations, acc_rewards, state, done=False, events=events)
                 acc_rewards, events = dict.fromkeys(self.slots, 0.0), []
                 fill = self._fill_controls(state)
+            elif tick % REALTIME_STATE_TICKS == 0:
+                self._publish_state(self._obs.state, {"decision": self.decision, "done": False,
+                                                      "scoreboard": self.env.rules.scoreboard()})
             with self._cond:
                 actions = {s.name: s.last_controls if s.waits_for or self.options.replacement == "repeat"
                            else NEUTRAL for s in self.slots.values() if s.occupant == "remote"}
@@ -554,10 +560,14 @@ class MatchRunner:
                 message.update(summary=summary, reason=MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED)
             raw = {"state": state_bytes} if slot.with_state else {}
             self._put(name, self._seal(message, raw), final=done)
-        self._publishers["state"].put(self._seal({"kind": "state", **common, "status": self.status,
-                                                  "slots": self._slots_public()}, {"state": state_bytes}))
+        self._publish_state(state, common, state_bytes)
         if events:
             self._publishers["events"].put(self._seal({"kind": "events", **common, "events": events}))
+
+    def _publish_state(self, state, common: dict, state_bytes: bytes | None = None) -> None:
+        self._publishers["state"].put(self._seal({"kind": "state", **common, "status": self.status,
+                                                  "slots": self._slots_public()},
+                                                 {"state": state_bytes or pack_value(encode_state(state))}))
 
     def _put(self, name: str, payload: bytes, final: bool = False) -> None:
         if not final:

@@ -11,36 +11,38 @@ import signal
 import threading
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
+
+from rocketdrl_ma.validation import Check, load_dataclass
 
 from .access import acl_config, read_users_file
-from rocketdrl_ma.validation import reject_unknown
-
 from .settings import SERVER_USER, ServerSettings, ZenohSettings, _load_yaml
+
+
+def _served(field: str, serves: Any) -> ServerSettings | None:
+    if serves is not None and not isinstance(serves, (str, ServerSettings)):
+        raise ValueError(f"{field}: expected the path of the server YAML, got {serves!r}")
+    return ServerSettings.load(serves) if isinstance(serves, str) else serves
 
 
 @dataclass(frozen=True)
 class RouterSettings:
     zenoh: ZenohSettings
-    serves: ServerSettings | None = None
+    serves: Annotated[Any, Check(_served)] = None
+    """the server YAML whose users and access rules the router enforces (its path, or the settings); null: none"""
 
     @classmethod
     def from_dict(cls, d: dict) -> "RouterSettings":
-        reject_unknown("router", d, ["zenoh", "serves"])
-        if "zenoh" not in d:
-            raise ValueError("router: needs a 'zenoh' section (mode: router)")
-        zenoh = d["zenoh"] if isinstance(d["zenoh"], ZenohSettings) else ZenohSettings.from_dict(d["zenoh"])
+        return load_dataclass(cls, d, "router")
+
+    def check(self) -> None:
+        zenoh = self.zenoh
         if zenoh.mode != "router":
             raise ValueError(f"zenoh.mode: a router config needs mode 'router', got {zenoh.mode!r}")
-        serves = d.get("serves")
-        if serves is not None and not isinstance(serves, (str, ServerSettings)):
-            raise ValueError(f"serves: expected the path of the server YAML, got {serves!r}")
-        server = ServerSettings.load(serves) if isinstance(serves, str) else serves
-        if zenoh.remote_listen() and not zenoh.insecure and (server is None or not server.access.enabled):
+        if zenoh.remote_listen() and not zenoh.insecure and (self.serves is None or not self.serves.access.enabled):
             raise ValueError(f"serves: the router listens beyond loopback ({zenoh.remote_listen()}) but "
                              "authenticates nobody; name the server YAML whose access.users it enforces, or set "
                              "zenoh.insecure: true on a network you trust")
-        return cls(zenoh, server)
 
     @classmethod
     def load(cls, path: str | Path) -> "RouterSettings":

@@ -20,15 +20,14 @@ from __future__ import annotations
 import fnmatch
 import ipaddress
 import json
-import math
 import os
 import re
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 from rocketdrl_ma.config import load_yaml_file, resolve_shipped_path
-from rocketdrl_ma.validation import as_mapping, check_name, reject_unknown
+from rocketdrl_ma.validation import Check, Expect, Name, OneOf, Range, check_choice, check_name, load_dataclass
 
 from .protocol import MAX_MESSAGE_BYTES
 
@@ -43,6 +42,12 @@ DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 DEFAULT_USER = "guest"  # a client without Zenoh authentication (loopback): just a name, proves nothing
 _SECURE_PROTOCOLS = ("tls", "quic")
 _CONFIG_NAME = re.compile(r"^([A-Za-z0-9_\-]+)/([A-Za-z0-9_\-]+)\.ya?ml$")
+
+Endpoints = Annotated[tuple[str, ...], Expect(f"a list of endpoints like {DEFAULT_ENDPOINT!r}")]
+PathText = Annotated[str, Expect("a path")]
+Names = Annotated[tuple[str, ...], Expect("a list of names")]
+Count = Annotated[int, Range(minimum=0), Expect("an integer >= 0")]
+Amount = Annotated[float, Range(minimum=0), Expect("a finite number >= 0")]
 
 
 def _endpoint_host(endpoint: str) -> str:
@@ -95,9 +100,9 @@ class ZenohSettings:
     shared memory are off and Zenoh reassembles at most ``MAX_MESSAGE_BYTES`` per message, unless
     ``options`` says otherwise.
     """
-    mode: str = "peer"
-    listen: tuple[str, ...] | None = None
-    connect: tuple[str, ...] = ()
+    mode: Annotated[str, OneOf(ZENOH_MODES)] = "peer"
+    listen: Endpoints | None = None
+    connect: Endpoints = ()
     multicast: bool = False
     allow_remote: bool = False
     any_interface: bool = False
@@ -108,27 +113,9 @@ class ZenohSettings:
 
     @classmethod
     def from_dict(cls, d: dict | None) -> "ZenohSettings":
-        d = dict(d or {})
-        reject_unknown("zenoh", d, [f.name for f in fields(cls)])
-        for key in ("listen", "connect"):
-            if d.get(key) is not None:
-                if not (isinstance(d[key], (list, tuple)) and all(isinstance(e, str) for e in d[key])):
-                    raise ValueError(f"zenoh.{key}: expected a list of endpoints like {DEFAULT_ENDPOINT!r}, "
-                                     f"got {d[key]!r}")
-                d[key] = tuple(d[key])
-        for key in ("tls", "auth", "options"):
-            if not isinstance(d.get(key, {}), dict):
-                raise ValueError(f"zenoh.{key}: expected a mapping, got {d[key]!r}")
-        for key in ("multicast", "allow_remote", "any_interface", "insecure"):
-            if not isinstance(d.get(key, False), bool):
-                raise ValueError(f"zenoh.{key}: expected true or false, got {d[key]!r}")
-        settings = cls(**d)
-        settings.check()
-        return settings
+        return load_dataclass(cls, d, "zenoh", "zenoh.")
 
     def check(self) -> None:
-        if self.mode not in ZENOH_MODES:
-            raise ValueError(f"zenoh.mode: {self.mode!r} is not one of {list(ZENOH_MODES)}")
         if self.mode == "client" and not self.connect:
             raise ValueError("zenoh.connect: client mode needs at least one endpoint to connect to")
         remote = [e for e in self.listen_endpoints() if not is_loopback_endpoint(e)]
@@ -161,11 +148,8 @@ class ZenohSettings:
 
     def with_overrides(self, listen: list[str] | None = None, connect: list[str] | None = None,
                        mode: str | None = None) -> "ZenohSettings":
-        changed = replace(self, listen=tuple(listen) if listen is not None else self.listen,
-                          connect=tuple(connect) if connect is not None else self.connect,
-                          mode=mode or self.mode)
-        changed.check()
-        return changed
+        changes = {"listen": listen, "connect": connect, "mode": mode or None}
+        return ZenohSettings.from_dict({**_values(self), **{k: v for k, v in changes.items() if v is not None}})
 
     def zenoh_config(self, extra: dict[str, Any] | None = None):
         """The ``zenoh.Config`` these settings describe; ``extra`` adds config paths (e.g. the server's ACL)."""
@@ -220,27 +204,13 @@ class AccessSettings:
     client is a ``player`` by the name it claims (demos on loopback only; admin ops still need the admin
     secret; seats are refused).
     """
-    users_file: str | None = None
-    roles: dict = field(default_factory=dict)
-    create: str = "admin"
+    users_file: Annotated[str, Expect("a file path")] | None = None
+    roles: Annotated[dict[str, str], Check(_check_roles)] = field(default_factory=dict)
+    create: Annotated[str, OneOf(("admin", "player"))] = "admin"
 
     @classmethod
     def from_dict(cls, d: Any) -> "AccessSettings":
-        d = as_mapping("access", d)
-        reject_unknown("access", d, [f.name for f in fields(cls)])
-        if d.get("users_file") is not None and not isinstance(d["users_file"], str):
-            raise ValueError(f"access.users_file: expected a file path, got {d['users_file']!r}")
-        roles = as_mapping("access.roles", d.get("roles"))
-        for user, role in roles.items():
-            check_name("access.roles user", user)
-            if user == SERVER_USER:
-                raise ValueError(f"access.roles: {SERVER_USER!r} is the match server's own user; give it no role")
-            if role not in ROLES:
-                raise ValueError(f"access.roles.{user}: {role!r} is not one of {list(ROLES)}")
-        if d.get("create", "admin") not in ("admin", "player"):
-            raise ValueError(f"access.create: {d['create']!r} is not one of ['admin', 'player']")
-        d["roles"] = roles
-        return cls(**d)
+        return load_dataclass(cls, d, "access", "access.")
 
     @property
     def enabled(self) -> bool:
@@ -268,53 +238,35 @@ class Limits:
     ``max_observation_floats``: its size; ``max_observation_rays``: the rays cast for it, summed over
     every ray sensor it joins (the builders' main cost).
     """
-    max_matches: int = 16
-    max_matches_per_user: int = 4
-    max_clock_s: float = 900.0
-    max_overtime_limit_s: float = 300.0
-    max_kickoff_countdown_s: float = 10.0
-    max_minigame_s: float = 900.0
-    min_deadline_ms: float = 1.0
-    max_deadline_ms: float = 2000.0
-    max_ready_timeout_s: float = 3600.0
-    missed_streak: int = 10
-    configs: tuple[str, ...] = ("matches", "minigames")
-    overrides: tuple[str, ...] = ("clock_s", "overtime_limit_s", "kickoff_countdown_s", "boost_pads", "demos",
+    max_matches: Count = 16
+    max_matches_per_user: Count = 4
+    max_clock_s: Amount = 900.0
+    max_overtime_limit_s: Amount = 300.0
+    max_kickoff_countdown_s: Amount = 10.0
+    max_minigame_s: Amount = 900.0
+    min_deadline_ms: Amount = 1.0
+    max_deadline_ms: Amount = 2000.0
+    max_ready_timeout_s: Amount = 3600.0
+    missed_streak: Count = 10
+    configs: Names = ("matches", "minigames")
+    overrides: Names = ("clock_s", "overtime_limit_s", "kickoff_countdown_s", "boost_pads", "demos",
                                   "car_preset", "max_cycles", "observation", "action", "rounds", "timeout_s",
                                   "difficulty", "arena_shape")
-    fill: tuple[str, ...] = ("idle", "scripted:*")
-    requests_per_s: float = 50.0
-    request_burst: int = 100
-    observations: tuple[str, ...] = ("seed_sensors", "ray", "team_relative", "seed_barrier", "seed_aerial")
-    max_observation_floats: int = 1024
-    max_observation_rays: int = 64
+    fill: Names = ("idle", "scripted:*")
+    requests_per_s: Amount = 50.0
+    request_burst: Count = 100
+    observations: Annotated[Names, Check(_check_builders)] = (
+        "seed_sensors", "ray", "team_relative", "seed_barrier", "seed_aerial")
+    max_observation_floats: Count = 1024
+    max_observation_rays: Count = 64
 
     @classmethod
     def from_dict(cls, d: Any) -> "Limits":
-        d = as_mapping("limits", d)
-        reject_unknown("limits", d, [f.name for f in fields(cls)])
-        for f in fields(cls):
-            if f.name not in d:
-                continue
-            value = d[f.name]
-            if isinstance(f.default, tuple):
-                if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
-                    raise ValueError(f"limits.{f.name}: expected a list of names, got {value!r}")
-                d[f.name] = tuple(value)
-            elif isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                    or value < 0 or (isinstance(f.default, int) and not isinstance(value, int)):
-                kind = "an integer" if isinstance(f.default, int) else "a finite number"
-                raise ValueError(f"limits.{f.name}: expected {kind} >= 0, got {value!r}")
-        if "observations" in d:
-            from rocketdrl_ma.env.observations import OBS_BUILDERS
-            unknown = sorted(set(d["observations"]) - set(OBS_BUILDERS))
-            if unknown:
-                raise ValueError(f"limits.observations: {unknown} are not observation builders; allowed: "
-                                 f"{sorted(OBS_BUILDERS)}")
-        limits = cls(**d)
-        if limits.min_deadline_ms > limits.max_deadline_ms:
+        return load_dataclass(cls, d, "limits", "limits.")
+
+    def check(self) -> None:
+        if self.min_deadline_ms > self.max_deadline_ms:
             raise ValueError("limits.min_deadline_ms: larger than limits.max_deadline_ms")
-        return limits
 
     def check_config_name(self, config: Any) -> str:
         """A lobby ``config``: a name like ``matches/2v2.yaml`` from an allowed folder, nothing else."""
@@ -391,51 +343,20 @@ class MatchOptions:
     player may join an empty slot; otherwise a slot needs its ticket (handed out by the match's creator)
     or a seat: ``seats`` maps slots to the user who alone may join them.
     """
-    config: str | dict = "matches/1v1.yaml"
-    overrides: dict = field(default_factory=dict)
-    mode: str = "lockstep"
-    deadline_ms: float = 50.0
-    replacement: str = "repeat"
-    ready_timeout_s: float = 30.0
-    fill: str = "scripted:ball_chaser"
-    seed: int | None = None
+    config: Annotated[str | dict, Expect("a config name or mapping")] = "matches/1v1.yaml"
+    overrides: Annotated[dict, Expect("a mapping of config keys")] = field(default_factory=dict)
+    mode: Annotated[str, OneOf(MATCH_MODES)] = "lockstep"
+    deadline_ms: Amount = 50.0
+    replacement: Annotated[str, OneOf(REPLACEMENTS)] = "repeat"
+    ready_timeout_s: Amount = 30.0
+    fill: Annotated[str, Check(_check_fill)] = "scripted:ball_chaser"
+    seed: Annotated[int | None, Expect("an int or null")] = None
     open: bool = False
-    seats: dict = field(default_factory=dict)
+    seats: Annotated[dict[Name, Name], Expect("a mapping of slot to user")] = field(default_factory=dict)
 
     @classmethod
     def from_dict(cls, d: dict, base: "MatchOptions | None" = None) -> "MatchOptions":
-        if not isinstance(d, dict):
-            raise ValueError(f"match options: expected a mapping, got {type(d).__name__}")
-        reject_unknown("match options", d, [f.name for f in fields(cls)])
-        options = replace(base or cls(), **d)
-        options.check()
-        return options
-
-    def check(self) -> None:
-        if not isinstance(self.config, (str, dict)):
-            raise ValueError(f"config: expected a config name or mapping, got {self.config!r}")
-        if not isinstance(self.overrides, dict):
-            raise ValueError(f"overrides: expected a mapping of config keys, got {self.overrides!r}")
-        if self.mode not in MATCH_MODES:
-            raise ValueError(f"mode: {self.mode!r} is not one of {list(MATCH_MODES)}")
-        if self.replacement not in REPLACEMENTS:
-            raise ValueError(f"replacement: {self.replacement!r} is not one of {list(REPLACEMENTS)}")
-        for name in ("deadline_ms", "ready_timeout_s"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
-                    or value < 0:
-                raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
-        if not isinstance(self.fill, str) or not (self.fill == "idle" or ":" in self.fill):
-            raise ValueError(f"fill: expected 'idle' or a policy spec like 'scripted:ball_chaser', got {self.fill!r}")
-        if self.seed is not None and (isinstance(self.seed, bool) or not isinstance(self.seed, int)):
-            raise ValueError(f"seed: expected an int or null, got {self.seed!r}")
-        if not isinstance(self.open, bool):
-            raise ValueError(f"open: expected true or false, got {self.open!r}")
-        if not isinstance(self.seats, dict):
-            raise ValueError(f"seats: expected a mapping of slot to user, got {self.seats!r}")
-        for slot, user in self.seats.items():
-            check_name("seats slot", slot)
-            check_name(f"seats.{slot}", user)
+        return load_dataclass(cls, d, "match options", base=base)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -443,45 +364,24 @@ class MatchOptions:
 
 @dataclass(frozen=True)
 class ServerSettings:
-    name: str = "local"
+    name: Name = "local"
     zenoh: ZenohSettings = field(default_factory=ZenohSettings)
-    results: str = "runs/server/results.sqlite"
-    key_dir: str | None = None
+    results: PathText = "runs/server/results.sqlite"
+    key_dir: PathText | None = None
     access: AccessSettings = field(default_factory=AccessSettings)
     limits: Limits = field(default_factory=Limits)
     match_defaults: MatchOptions = field(default_factory=MatchOptions)
-    matches: tuple[dict, ...] = ()
-    max_finished_kept: int = 100
+    matches: Annotated[tuple[dict, ...] | None, Expect("a list of match options"), Check(_listed)] = ()
+    max_finished_kept: Count = 100
 
     @classmethod
     def from_dict(cls, d: dict) -> "ServerSettings":
-        d = dict(d or {})
-        reject_unknown("server", d, [f.name for f in fields(cls)])
-        check_name("name", d.get("name", cls.name))
-        if "zenoh" in d and not isinstance(d["zenoh"], ZenohSettings):
-            d["zenoh"] = ZenohSettings.from_dict(d["zenoh"])
-        if "access" in d and not isinstance(d["access"], AccessSettings):
-            d["access"] = AccessSettings.from_dict(d["access"])
-        if "limits" in d and not isinstance(d["limits"], Limits):
-            d["limits"] = Limits.from_dict(d["limits"])
-        if "match_defaults" in d and not isinstance(d["match_defaults"], MatchOptions):
-            d["match_defaults"] = MatchOptions.from_dict(d["match_defaults"] or {})
-        matches = d.get("matches") or []
-        if not isinstance(matches, (list, tuple)):
-            raise ValueError(f"matches: expected a list of match options, got {matches!r}")
-        for i, m in enumerate(matches):
-            if not isinstance(m, dict):
-                raise ValueError(f"matches[{i}]: expected a mapping, got {m!r}")
-            MatchOptions.from_dict({k: v for k, v in m.items() if k != "id"}, d.get("match_defaults"))
-        d["matches"] = tuple(matches)
-        for key in ("results", "key_dir"):
-            if d.get(key) is not None and not isinstance(d[key], str):
-                raise ValueError(f"{key}: expected a path, got {d[key]!r}")
-        settings = cls(**d)
-        settings.check()
-        return settings
+        return load_dataclass(cls, d, "server")
 
     def check(self) -> None:
+        for i, m in enumerate(self.matches):
+            load_dataclass(MatchOptions, {k: v for k, v in m.items() if k != "id"}, f"matches[{i}]", f"matches[{i}].",
+                           self.match_defaults)
         zenoh = self.zenoh
         if zenoh.remote_listen() and not self.access.enabled and not zenoh.insecure:
             raise ValueError(f"access.users_file: the server listens beyond loopback ({zenoh.remote_listen()}) "
@@ -546,53 +446,33 @@ class ClientSettings:
     with exponential backoff and jitter, while no signed reply comes back (a lobby rate-limited by a flood,
     a lost reply) before the server counts as gone; 0: one try.
     """
-    server: str = "local"
+    server: Name = "local"
     zenoh: ZenohSettings = field(default_factory=lambda: ZenohSettings(mode="client", connect=(DEFAULT_ENDPOINT,)))
-    user: str | None = None
-    server_key: str | None = None
-    key_dir: str | None = None
-    admin_secret_file: str | None = None
-    admin_secret: str | None = None
+    user: Name | None = None
+    server_key: Annotated[str, Check(_check_public_key)] | None = None
+    key_dir: PathText | None = None
+    admin_secret_file: PathText | None = None
+    admin_secret: Annotated[str, Check(_check_secret)] | None = None
     trust_on_first_use: bool = True
-    known_servers: str | None = None
-    inspect_retry_s: float = 30.0
-    credentials_from: str | None = None
+    known_servers: PathText | None = None
+    inspect_retry_s: Annotated[float, Range(minimum=0), Expect("a finite number of seconds >= 0")] = 30.0
+    credentials_from: PathText | None = None
 
     @classmethod
     def from_dict(cls, d: dict) -> "ClientSettings":
-        d = dict(d or {})
-        reject_unknown("client", d, [f.name for f in fields(cls)])
-        check_name("server", d.get("server", cls.server))
-        if "zenoh" in d and not isinstance(d["zenoh"], ZenohSettings):
-            d["zenoh"] = ZenohSettings.from_dict(d["zenoh"])
-        if d.get("user") is not None:
-            check_name("user", d["user"])
-        if d.get("server_key") is not None:
-            from .crypto import parse_public_key
-            parse_public_key(d["server_key"])
-        for key in ("key_dir", "admin_secret_file", "known_servers", "credentials_from"):
-            if d.get(key) is not None and not isinstance(d[key], str):
-                raise ValueError(f"{key}: expected a path, got {d[key]!r}")
-        if d.get("admin_secret") is not None:
-            from .crypto import parse_secret
-            parse_secret(d["admin_secret"], "admin_secret")
-        if not isinstance(d.get("trust_on_first_use", True), bool):
-            raise ValueError(f"trust_on_first_use: expected true or false, got {d['trust_on_first_use']!r}")
-        retry_s = d.get("inspect_retry_s", 0.0)
-        if isinstance(retry_s, bool) or not isinstance(retry_s, (int, float)) or not math.isfinite(retry_s) \
-                or retry_s < 0:
-            raise ValueError(f"inspect_retry_s: expected a finite number of seconds >= 0, got {retry_s!r}")
-        settings = cls(**d)
-        if settings.zenoh.mode != "client":
-            raise ValueError(f"zenoh.mode: a bot, spectator or lobby client connects as a client (Zenoh access "
-                             f"control does not hold for peers), got {settings.zenoh.mode!r}")
-        auth_user = settings.zenoh.auth.get("user")
-        if auth_user is not None and settings.user is not None and auth_user != settings.user:
-            raise ValueError(f"user: {settings.user!r} differs from zenoh.auth.user {auth_user!r}; the server "
-                             "knows a client by its authenticated user")
+        settings = load_dataclass(cls, d, "client")
         if not settings.zenoh.auth and settings.credentials_from is None:
             settings = settings._with_local_credentials()
         return settings
+
+    def check(self) -> None:
+        if self.zenoh.mode != "client":
+            raise ValueError(f"zenoh.mode: a bot, spectator or lobby client connects as a client (Zenoh access "
+                             f"control does not hold for peers), got {self.zenoh.mode!r}")
+        auth_user = self.zenoh.auth.get("user")
+        if auth_user is not None and self.user is not None and auth_user != self.user:
+            raise ValueError(f"user: {self.user!r} differs from zenoh.auth.user {auth_user!r}; the server "
+                             "knows a client by its authenticated user")
 
     def _with_local_credentials(self) -> "ClientSettings":
         """With the password of its user from the server's folder, if that file is there and readable."""
@@ -615,7 +495,7 @@ class ClientSettings:
         return cls.from_dict({**raw, **{k: v for k, v in overrides.items() if v is not None}})
 
     def replace(self, **changes: Any) -> "ClientSettings":
-        current = {f.name: getattr(self, f.name) for f in fields(self)}
+        current = _values(self)
         if self.credentials_from is not None and "zenoh" not in changes and \
                 {"user", "key_dir", "server"} & {k for k, v in changes.items() if v is not None}:
             current.update(zenoh=replace(self.zenoh, auth={}), credentials_from=None)  # found again for the change
@@ -632,3 +512,51 @@ class ClientSettings:
     @property
     def known_servers_path(self) -> Path:
         return Path(self.known_servers) if self.known_servers else known_servers_path()
+
+
+def _values(settings: Any) -> dict[str, Any]:
+    """A settings dataclass's values by field, to load again with some changed."""
+    return {f.name: getattr(settings, f.name) for f in fields(settings)}
+
+
+def _listed(field_name: str, entries: tuple | None) -> tuple:
+    """An empty list written as null (``matches:``) is empty."""
+    return entries or ()
+
+
+def _check_roles(field_name: str, roles: dict[str, str]) -> dict[str, str]:
+    for user, role in roles.items():
+        check_name(f"{field_name} user", user)
+        if user == SERVER_USER:
+            raise ValueError(f"{field_name}: {SERVER_USER!r} is the match server's own user; give it no role")
+        check_choice(f"{field_name}.{user}", role, ROLES)
+    return roles
+
+
+def _check_builders(field_name: str, names: tuple[str, ...]) -> tuple[str, ...]:
+    from rocketdrl_ma.env.observations import OBS_BUILDERS
+
+    unknown = sorted(set(names) - set(OBS_BUILDERS))
+    if unknown:
+        raise ValueError(f"{field_name}: {unknown} are not observation builders; allowed: {sorted(OBS_BUILDERS)}")
+    return names
+
+
+def _check_fill(field_name: str, spec: str) -> str:
+    if not (spec == "idle" or ":" in spec):
+        raise ValueError(f"{field_name}: expected 'idle' or a policy spec like 'scripted:ball_chaser', got {spec!r}")
+    return spec
+
+
+def _check_public_key(field_name: str, key: str) -> str:
+    from .crypto import parse_public_key  # imported when a key is given: the crypto library loads slowly
+
+    parse_public_key(key, field_name)
+    return key
+
+
+def _check_secret(field_name: str, secret: str) -> str:
+    from .crypto import parse_secret
+
+    parse_secret(secret, field_name)
+    return secret

@@ -31,7 +31,8 @@ FINAL_GRACE_S = 0.5
 
 @dataclass(frozen=True)
 class StateUpdate:
-    """One decision's state as the server published it (``wire_state``: the wire map, numpy arrays)."""
+    """A state as the server published it (``wire_state``: the wire map, numpy arrays): each decision's, and in a
+    real-time match also every 2 ticks between decisions (with the decision's number)."""
     match: str
     decision: int
     seq: int

@@ -6,6 +6,8 @@ The websocket speaks JSON requests in and msgpack messages out (``frames.py``). 
     {"op": "watch", "kind": "match"|"train", "id"}  -> roster, then frames (at most ``max_rate`` a second),
                                                        status changes, and the final message
     {"op": "replay", "id"}                          -> {"type": "replay", "roster", "frames", ...}
+    {"op": "league_replay", "key"}                  -> a league's stored match played again from its seed, as a
+                                                       replay (``rocketdrl-ma web --league LEAGUE.yaml``)
     {"op": "stop"}                                  -> stops following
 
 With ``play`` (``rocketdrl-ma web --play``, loopback only) a page may also take a seat (``play.py``):
@@ -17,7 +19,8 @@ With ``play`` (``rocketdrl-ma web --play``, loopback only) a page may also take 
 
 Without it the page server is read-only by construction: it never joins a match, never sends an action and
 publishes nothing on Zenoh; no request can reach a car. Requests for anything else get an error message.
-The page's own origin is the only one allowed to open the websocket, and the Host header must name the
+With a league (``--league``), ``/league`` is its page: standings, ratings, payoff matrix and matches, from
+``/api/league``. The page's own origin is the only one allowed to open the websocket, and the Host header must name the
 address the server listens on (no DNS rebinding onto a loopback page server).
 """
 from __future__ import annotations
@@ -30,7 +33,7 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 from rocketdrl_ma.config import REPO_ROOT
 from rocketdrl_ma.physics.compile_notice import COLD_COMPILE_ESTIMATE_S
@@ -45,14 +48,21 @@ from .frames import feed_events, frame, pack_message, roster
 from .play import PLAY_CONFIGS, HumanSeat, create_match
 from .replays import ReplayLibrary
 
+if TYPE_CHECKING:  # the league's modules load only for a page server that shows one
+    from .league import LeagueView
+
 log = logging.getLogger(__name__)
 STATIC_DIR = Path(__file__).parent / "static"
 PACKAGED_VENDOR_DIR = Path(__file__).parent / "vendor"  # in a wheel: the page's npm files, node_modules' layout
 MAX_STATES_PER_S = 30.0
+#: a page that plays gets its match's states up to this rate (real-time matches publish 60 a second)
+PLAYER_STATES_PER_S = 60.0
+#: with nothing arriving, how often a followed source is looked at anyway (the first-state hint, a silent server)
+IDLE_LOOK_S = 0.25
 MAX_REQUEST_BYTES = 64 * 1024
 #: a followed source with no state after this long gets a hint on the page (kernels compiling, bots joining)
 FIRST_STATE_HINT_S = 2.0
-WATCH_OPS = ("list", "watch", "replay", "stop")
+WATCH_OPS = ("list", "watch", "replay", "league_replay", "stop")
 PLAY_OPS = ("play", "input", "leave")
 OPS = WATCH_OPS + PLAY_OPS
 #: how long a stopping page server waits for each seat's thread (it ends at its match's next decision)
@@ -145,8 +155,10 @@ class PageServer:
 
     def __init__(self, make_feed: Callable[[], SpectatorFeed] | None, library: ReplayLibrary, *,
                  host: str = "127.0.0.1", port: int = 8765, max_rate: float = MAX_STATES_PER_S,
-                 node_modules: Path | None = None, play_opponents: list[str] | None = None):
-        """``play_opponents``: the policies a page may play against (``play.opponent_choices``); None: no play."""
+                 node_modules: Path | None = None, play_opponents: list[str] | None = None,
+                 league: LeagueView | None = None):
+        """``play_opponents``: the policies a page may play against (``play.opponent_choices``); None: no play.
+        ``league``: the league the ``/league`` page shows (its replays' folder must be one of ``library``'s)."""
         if not 0 < max_rate <= MAX_STATES_PER_S:
             raise ValueError(f"max_rate: states per second in (0, {MAX_STATES_PER_S:g}], got {max_rate!r}")
         if play_opponents is not None and not is_loopback_host(host):
@@ -154,9 +166,9 @@ class PageServer:
         self.play_opponents = play_opponents
         self._tickets: dict[str, dict[str, str]] = {}  # the slots' tickets of the matches created for pages
         self._seats: set[HumanSeat] = set()  # the pages' seats, left when the page server stops
-        self.make_feed, self.library = make_feed, library
+        self.make_feed, self.library, self.league = make_feed, library, league
         self.host, self.port, self.max_rate = host, port, float(max_rate)
-        self.files = {"/": STATIC_DIR / "index.html"}
+        self.files = {"/": STATIC_DIR / "index.html", "/league": STATIC_DIR / "league.html"}
         self.files.update({f"/app/{p.name}": p for p in sorted(STATIC_DIR.iterdir()) if p.is_file()})
         self.files.update(vendor_files(node_modules or find_node_modules()))
         self.stats = FrameStats()
@@ -195,6 +207,10 @@ class PageServer:
             return respond(200, "OK", arena_json(), CONTENT_TYPES[".json"])
         if path == "/api/stats":
             return respond(200, "OK", json.dumps(self.stats.as_dict()).encode(), CONTENT_TYPES[".json"])
+        if path == "/api/league":
+            if self.league is None:
+                return respond(404, "Not Found", b"no league: start the page server with --league LEAGUE.yaml\n")
+            return respond(200, "OK", json.dumps(self.league.summary()).encode(), CONTENT_TYPES[".json"])
         file = self.files.get(path)
         if file is None:
             return respond(404, "Not Found", f"{path}: not found\n".encode())
@@ -290,7 +306,7 @@ class PageServer:
                         seat.set_controls(request.get("c"))
                         await ws.send(pack_message({"type": "ack", "n": request.get("n")}))
                         continue
-                    if op in ("watch", "replay", "stop", "play", "leave"):
+                    if op in ("watch", "replay", "league_replay", "stop", "play", "leave"):
                         stop_following()
                     if op in ("play", "leave") and seat is not None:
                         seat.leave()
@@ -303,7 +319,8 @@ class PageServer:
                                                     "status": join.status, "decision_ticks": join.decision_ticks}))
                         feed = await self._get_feed()
                         follower = await asyncio.to_thread(feed.follow, "match", join.match)
-                        follow = (asyncio.create_task(self._pump(ws, follower, "match", join.match)), follower)
+                        follow = (asyncio.create_task(self._pump(ws, follower, "match", join.match,
+                                                                 PLAYER_STATES_PER_S)), follower)
                     elif op == "leave":
                         await ws.send(pack_message({"type": "seat", "match": None, "slot": None}))
                     elif op == "list":
@@ -320,6 +337,14 @@ class PageServer:
                     elif op == "replay":
                         reply = await asyncio.to_thread(self.library.open, request.get("id"))
                         await ws.send(pack_message(reply))
+                    elif op == "league_replay":
+                        if self.league is None:
+                            raise ValueError("league_replay: this page server shows no league (--league LEAGUE.yaml)")
+                        path, same_score = await asyncio.to_thread(self.league.replay, request.get("key"))
+                        reply = await asyncio.to_thread(self.library.open,
+                                                        f"{self.league.replay_dir.name}/{path.name}")
+                        await ws.send(pack_message({**reply, "league": {"key": request.get("key"),
+                                                                        "same_score": same_score}}))
                 except (ValueError, json.JSONDecodeError) as e:
                     await ws.send(pack_message({"type": "error", "error": str(e)}))
         finally:
@@ -328,10 +353,18 @@ class PageServer:
                 seat.leave()
                 self._seats.discard(seat)
 
-    async def _pump(self, ws, follower, kind: str, source_id: str) -> None:
-        """Send the newest state at most ``max_rate`` times a second (never two within one period), with
-        every event since the last one."""
-        period = 1.0 / self.max_rate
+    async def _pump(self, ws, follower, kind: str, source_id: str, max_rate: float | None = None) -> None:
+        """Send the newest state as soon as it arrives, at most ``max_rate`` (default: the page server's) times a
+        second (never two within one period), with every event since the last one."""
+        period = 1.0 / (max_rate or self.max_rate)
+        loop, arrived = asyncio.get_running_loop(), asyncio.Event()
+
+        def on_arrival() -> None:  # Zenoh's thread
+            try:
+                loop.call_soon_threadsafe(arrived.set)
+            except RuntimeError:  # the loop closed while a last sample came in
+                pass
+        follower.on_arrival = on_arrival
         cast_shown: dict | None = None
         agents: list[str] | None = None
         hint_at: float | None = time.monotonic() + FIRST_STATE_HINT_S  # None once a state came or the hint went
@@ -347,6 +380,7 @@ class PageServer:
                                                                                   "error")}}))
                 return
             while True:
+                arrived.clear()
                 update: FeedUpdate = follower.poll()
                 events += update.events
                 live, final = update.state, update.final
@@ -381,9 +415,12 @@ class PageServer:
                     events = []
                     if kind == "match":
                         return
-                # the next frame a whole period after this one; with nothing new, look again soon
-                wait = period - (time.monotonic() - last_sent) if live is not None else period / 4
-                await asyncio.sleep(max(0.0, wait))
+                if live is not None:  # the next frame a whole period after this one
+                    await asyncio.sleep(max(0.0, period - (time.monotonic() - last_sent)))
+                try:
+                    await asyncio.wait_for(arrived.wait(), IDLE_LOOK_S)
+                except TimeoutError:
+                    pass
         except asyncio.CancelledError:
             raise
         except Exception as e:  # a closed websocket, or a bug: the follower must go either way

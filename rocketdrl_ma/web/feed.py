@@ -78,6 +78,8 @@ class Follower:
         self._events: list[bytes] = []
         self._server_left = False
         self.lobby: LobbyClient | None = None  # a match's lobby, asked whether a silent server is gone
+        #: called (from Zenoh's thread) when anything arrives: the page server sends it on at once, not at its next look
+        self.on_arrival: Callable[[], None] = lambda: None
         self._declared = [session.declare_subscriber(state_key, self._on_state),
                           session.declare_subscriber(events_key, self._on_events)]
 
@@ -89,6 +91,7 @@ class Follower:
             if sample.kind == SampleKind.DELETE:
                 with self._lock:
                     self._server_left = True
+                self.on_arrival()
         self._declared.append(session.liveliness().declare_subscriber(alive_key, on_alive, history=True))
 
     def lost_end(self) -> dict | None:
@@ -112,11 +115,13 @@ class Follower:
         with self._lock:
             self._states.append(payload)
             del self._states[:-KEPT_STATES]
+        self.on_arrival()
 
     def _on_events(self, sample) -> None:
         payload = sample.payload.to_bytes()
         with self._lock:
             self._events.append(payload)
+        self.on_arrival()
 
     def poll(self) -> FeedUpdate:
         with self._lock:

@@ -189,6 +189,10 @@ def test_a_page_drives_only_its_own_seat(stack):
     info = stack["procs"].inspect(stack["endpoint"], "play", seat["match"])
     assert info["options"]["fill"] == f"checkpoint:{CHECKPOINT}" and info["options"]["mode"] == "realtime"
     assert info["slot_status"]["blue_0"]["bot"] == "human"
+    # the player's page gets states between decisions (a real-time match publishes every 2 ticks, not every 8)
+    ticks = [socket.recv_type("frame", 60.0)["t"] for _ in range(30)]
+    gaps = {b - a for a, b in zip(ticks, ticks[1:])}
+    assert min(gaps) < seat["decision_ticks"] and all(g % 2 == 0 for g in gaps), (seat["decision_ticks"], gaps)
     socket.send(op="leave")
     assert socket.recv_type("seat")["match"] is None
     socket.close()

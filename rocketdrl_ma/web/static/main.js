@@ -7,6 +7,8 @@ import { TRAIL_POINTS, View } from "./scene.js";
 import { FLAG_DEMOED, Timeline } from "./timeline.js";
 
 const $ = (id) => document.getElementById(id);
+// `?sharp` in the page's address: always the full pixel ratio, however slowly it draws
+const SHARP = new URLSearchParams(location.search).has("sharp");
 const view = new View($("view"));
 const timeline = new Timeline();
 const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
@@ -40,6 +42,8 @@ function onMessage(data) {
     case "watching": {
       const mine = !!seat && seat.match === message.id;
       timeline.startLive(mine);
+      pendingGoal = null;
+      $("timeline").hidden = mine; // a spectator may pause and rewind a live game; a player's game stays live
       setTitle(mine ? `you are ${seat.slot} in match ${message.id}`
         : `${message.kind === "train" ? "training run" : "match"} ${message.id}`);
       break;
@@ -52,16 +56,28 @@ function onMessage(data) {
       stats.frames += 1; stats.bytesLast = data.byteLength; stats.bytesMax = Math.max(stats.bytesMax, data.byteLength);
       stats.arrivals.push(now);
       timeline.pushLive(message, now);
+      if (!timeline.asPlayer && timeline.follow) {
+        pendingGoal = (message.e || []).find((e) => e.kind === "goal") || pendingGoal;
+      }
       break;
     case "final":
       if (seat) seat.ended = true;
       timeline.addEvents(message.events);
       status = { ...(status || {}), status: message.status, final: true, info: message.info || (status || {}).info };
-      if (message.status === "lost" || message.status === "failed") showNotice(`match ${message.status}: ${message.error}`, false);
+      if (message.status === "lost" || message.status === "failed") {
+        showNotice(`match ${message.status}: ${message.error}`, false);
+      }
       showFinalStats(message.summary);
       setTitle();
       break;
-    case "replay": openReplay(message); break;
+    case "replay":
+      openReplay(message);
+      if (message.league) {
+        showNotice(message.league.same_score === false ? "this replay's score differs from the stored result" : null,
+          false);
+        setTitle(`league match ${message.league.key} · played again from its seed`);
+      }
+      break;
     case "seat": onSeat(message); break;
     case "ack": onAck(message.n); break;
     case "error": console.warn(`page server: ${message.error}`); setTitle(`error: ${message.error}`); break;
@@ -82,7 +98,8 @@ function item(text, detail, active, onClick) {
 function showList(list) {
   lastList = list;
   const z = list.zenoh;
-  $("connection").textContent = z.connected ? `match server "${z.server}"` : (z.error ? "no match server reachable" : "replays only");
+  $("connection").textContent = z.connected ? `match server "${z.server}"`
+    : (z.error ? "no match server reachable" : "replays only");
   const isActive = (kind, id) => source && source.kind === kind && source.id === id;
   const score = (s) => (s ? ` ${s.blue ?? s[0]}-${s.orange ?? s[1]}` : "");
   $("list-matches").replaceChildren(...(list.matches.length ? list.matches.map((m) => {
@@ -138,11 +155,24 @@ function openReplayById(id) {
   if (lastList) showList(lastList);
 }
 
+// A league's stored match (the league page links here): the page server plays it again from its seed.
+function openLeagueReplay(key) {
+  if (seat) leaveSeat();
+  showFinalStats(null);
+  showNotice(`playing league match ${key} again from its seed…`, false);
+  source = { kind: "league", id: key };
+  status = null;
+  setTitle(`loading league match ${key}…`);
+  send({ op: "league_replay", key });
+}
+
 function openFromHash() {
-  const m = /^#(match|train|replay)=(.+)$/.exec(location.hash);
+  const m = /^#(match|train|replay|league)=(.+)$/.exec(location.hash);
   if (!m) return;
   const id = decodeURIComponent(m[2]);
-  if (m[1] === "replay") openReplayById(id); else watch(m[1], id);
+  if (m[1] === "replay") openReplayById(id);
+  else if (m[1] === "league") openLeagueReplay(id);
+  else watch(m[1], id);
 }
 
 // ------------------------------------------------------------------------------------------- play
@@ -151,7 +181,11 @@ function showPlayChoices(play) {
   if (!play) return;
   const fill = (select, values) => {
     if (select.options.length === values.length) return; // keep the user's choice across list refreshes
-    select.replaceChildren(...values.map((v) => { const o = document.createElement("option"); o.value = o.textContent = v; return o; }));
+    select.replaceChildren(...values.map((v) => {
+      const o = document.createElement("option");
+      o.value = o.textContent = v;
+      return o;
+    }));
   };
   fill($("play-config"), play.configs);
   fill($("play-opponent"), play.opponents);
@@ -219,7 +253,8 @@ function showBindings() {
   }));
 }
 
-$("play-create").addEventListener("click", () => play({ config: $("play-config").value, opponent: $("play-opponent").value }));
+$("play-create").addEventListener("click",
+  () => play({ config: $("play-config").value, opponent: $("play-opponent").value }));
 $("seat-leave").addEventListener("click", () => { leaveSeat(); setTitle("left the match"); });
 $("bindings-reset").addEventListener("click", () => { controls.resetBindings(); showBindings(); });
 
@@ -231,26 +266,56 @@ function openReplay(message) {
   setTitle(`replay ${message.id} · ${message.frames.length} states`);
   const seek = $("seek");
   seek.min = timeline.firstTick; seek.max = timeline.lastTick; seek.value = timeline.firstTick;
-  const span = Math.max(1, timeline.lastTick - timeline.firstTick);
-  $("goal-marks").replaceChildren(...timeline.events.filter((e) => e.kind === "goal").map((e) => {
-    const mark = document.createElement("span");
-    mark.className = e.team; mark.title = describe(e)[0];
-    mark.style.left = `${(100 * (e.tick - timeline.firstTick)) / span}%`;
-    return mark;
-  }));
+  showGoalMarks();
   $("timeline").hidden = false;
   $("speed").value = "1";
   timeline.speed = 1;
 }
 
+// A mark on the timeline per goal in it (a replay's, or the live buffer's).
+function showGoalMarks() {
+  const span = Math.max(1, timeline.lastTick - timeline.firstTick);
+  $("goal-marks").replaceChildren(...timeline.events.filter((e) => e.kind === "goal" && e.tick >= timeline.firstTick)
+    .map((e) => {
+      const mark = document.createElement("span");
+      mark.className = e.team; mark.title = describe(e)[0];
+      mark.style.left = `${(100 * (e.tick - timeline.firstTick)) / span}%`;
+      return mark;
+    }));
+}
+
+// A live game's goal, replayed once the view is INSTANT_REPLAY_DELAY_S past it: its last seconds before the goal.
+const INSTANT_REPLAY_DELAY_S = 1.5, INSTANT_REPLAY_BEFORE_S = 4, INSTANT_REPLAY_AFTER_S = 1;
+let pendingGoal = null, replayedGoal = null;
+function startInstantReplay() {
+  if (!pendingGoal) return;
+  if (!timeline.live || !timeline.follow) { pendingGoal = null; return; } // paused or rewound: the user's choice
+  const rate = timeline.tickRate;
+  if (timeline.playhead < pendingGoal.tick + INSTANT_REPLAY_DELAY_S * rate) return;
+  replayedGoal = pendingGoal;
+  pendingGoal = null;
+  timeline.instantReplay(replayedGoal.tick - INSTANT_REPLAY_BEFORE_S * rate,
+    replayedGoal.tick + INSTANT_REPLAY_AFTER_S * rate);
+}
+
 $("play").addEventListener("click", () => togglePlay());
 $("step-back").addEventListener("click", () => timeline.step(-1));
 $("step-forward").addEventListener("click", () => timeline.step(1));
-$("seek").addEventListener("input", (e) => { timeline.playing = false; timeline.seek(Number(e.target.value)); });
+$("go-live").addEventListener("click", () => timeline.goLive());
+$("seek").addEventListener("input", (e) => {
+  if (timeline.live) timeline.holdLive();
+  timeline.playing = false;
+  timeline.seek(Number(e.target.value));
+});
 $("speed").addEventListener("change", (e) => { timeline.speed = Number(e.target.value); });
 
 function togglePlay() {
-  if (timeline.live) return;
+  if (timeline.live) {
+    if (timeline.asPlayer) return;
+    if (timeline.follow || timeline.replaying) { timeline.holdLive(); timeline.playing = false; }
+    else timeline.playing = !timeline.playing; // on from where it was paused; the live edge takes it back
+    return;
+  }
   if (!timeline.playing && timeline.playhead >= timeline.lastTick) timeline.seek(timeline.firstTick);
   timeline.playing = !timeline.playing;
 }
@@ -267,7 +332,8 @@ function setRoster(r) {
       if (r.teams[i] !== team) return null;
       const div = document.createElement("div");
       div.className = "car-boost"; div.dataset.index = i;
-      div.innerHTML = `<span class="name"></span> <b class="amount"></b><div class="bar"><div class="fill"></div></div>`;
+      div.innerHTML = `<span class="name"></span> <b class="amount"></b>` +
+        `<div class="bar"><div class="fill"></div></div>`;
       div.querySelector(".name").textContent = r.names[i] === agent ? agent : `${agent} · ${r.names[i]}`;
       if (i === mine) div.classList.add("you");
       return div;
@@ -350,7 +416,8 @@ function updateHud(s) {
   write($("overtime"), "hidden", !s.o, (v) => { $("overtime").hidden = v; });
   for (const div of boostPanels) {
     const car = s.a[Number(div.dataset.index)];
-    write(div, "amount", car ? String(Math.round(car[7])) : "–", (v) => { div.querySelector(".amount").textContent = v; });
+    write(div, "amount", car ? String(Math.round(car[7])) : "–",
+      (v) => { div.querySelector(".amount").textContent = v; });
     write(div, "fill", car ? Math.round(car[7]) : 0, (v) => { div.querySelector(".fill").style.width = `${v}%`; });
     write(div, "demoed", !!car && (car[8] & FLAG_DEMOED) !== 0, (v) => div.classList.toggle("demoed", v));
   }
@@ -366,7 +433,23 @@ function updateHud(s) {
       return li;
     }));
   }
+  if (timeline.live && !$("timeline").hidden && timeline.frames.length) {
+    const seek = $("seek");
+    write(seek, "min", timeline.firstTick, (v) => { seek.min = v; });
+    write(seek, "max", timeline.lastTick, (v) => { seek.max = v; });
+    write(seek, "value", Math.round(timeline.playhead), (v) => { seek.value = v; });
+    const behindS = (timeline.lastTick - timeline.playhead) / timeline.tickRate;
+    const where = timeline.follow ? "live" : `${timeline.replaying ? "replay " : ""}-${behindS.toFixed(1)} s`;
+    write($("time"), "text", where, (v) => { $("time").textContent = v; });
+    write($("play"), "text", timeline.follow || timeline.playing ? "Pause" : "Play",
+      (v) => { $("play").textContent = v; });
+    write($("go-live"), "hidden", timeline.follow, (v) => { $("go-live").hidden = v; });
+    const goals = timeline.events.filter((e) => e.kind === "goal" && e.tick >= timeline.firstTick).length;
+    const span = `${Math.round(timeline.firstTick / 60)}|${Math.round(timeline.lastTick / 60)}`;
+    write($("goal-marks"), "at", `${goals}|${span}`, showGoalMarks);
+  }
   if (!timeline.live && timeline.frames.length) {
+    write($("go-live"), "hidden", true, (v) => { $("go-live").hidden = v; });
     write($("seek"), "value", Math.round(timeline.playhead), (v) => { $("seek").value = v; });
     const t0 = timeline.firstTick, rate = timeline.tickRate;
     $("time").textContent = `${clock((timeline.playhead - t0) / rate, true).replace("+", "")} / ` +
@@ -381,9 +464,14 @@ function updateTags(s) {
   const tags = $("tags").children;
   for (let i = 0; i < tags.length; i++) {
     const car = s ? s.a[i] : null;
-    const at = car && !(car[8] & FLAG_DEMOED) && !hudHidden ? view.screenPoint([car[0], car[1], car[2] + TAG_ABOVE_UU]) : null;
+    const shownCar = car && !(car[8] & FLAG_DEMOED) && !hudHidden;
+    const at = shownCar ? view.screenPoint([car[0], car[1], car[2] + TAG_ABOVE_UU]) : null;
+    // written only when it changes: a style write costs the page a style pass
+    const place = at ? `translate(${Math.round(at[0])}px, ${Math.round(at[1])}px) translate(-50%, -100%)` : "none";
+    if (tags[i].dataset.place === place) continue;
+    tags[i].dataset.place = place;
     tags[i].style.display = at ? "" : "none";
-    if (at) tags[i].style.transform = `translate(${Math.round(at[0])}px, ${Math.round(at[1])}px) translate(-50%, -100%)`;
+    if (at) tags[i].style.transform = place;
   }
 }
 
@@ -400,7 +488,9 @@ const BANNER_S = 3;
 function updateBanner(s) {
   let text = null, cls = "", sub = "";
   const goal = s ? timeline.shownEvents(8).filter((e) => e.kind === "goal").pop() : null;
-  if (goal && timeline.playhead - goal.tick < BANNER_S * (s.r || 120)) {
+  if (s && timeline.replaying && replayedGoal) {
+    text = "REPLAY"; cls = replayedGoal.team; sub = describe(replayedGoal)[0];
+  } else if (goal && timeline.playhead - goal.tick < BANNER_S * (s.r || 120)) {
     text = `GOAL ${goal.team.toUpperCase()}`; cls = goal.team; sub = describe(goal)[0].replace(/^GOAL \w+: /, "");
   } else if (s && s.k) {
     text = "KICKOFF";
@@ -424,7 +514,11 @@ function showFinalStats(summary) {
   const box = $("final-stats");
   if (!summary || !summary.stats || !roster) { box.hidden = true; return; }
   const head = document.createElement("tr");
-  head.append(...["", ...STAT_COLUMNS.map(([, label]) => label)].map((t) => { const th = document.createElement("th"); th.textContent = t; return th; }));
+  head.append(...["", ...STAT_COLUMNS.map(([, label]) => label)].map((t) => {
+    const th = document.createElement("th");
+    th.textContent = t;
+    return th;
+  }));
   const rows = roster.agents.filter((a) => summary.stats[a]).map((agent) => {
     const tr = document.createElement("tr");
     tr.className = `t${roster.teams[roster.agents.indexOf(agent)]}`;
@@ -436,7 +530,8 @@ function showFinalStats(summary) {
     return tr;
   });
   const title = document.createElement("h3");
-  const score = summary.score ? `${summary.score.blue ?? summary.score[0]} – ${summary.score.orange ?? summary.score[1]}` : "";
+  const score = summary.score
+    ? `${summary.score.blue ?? summary.score[0]} – ${summary.score.orange ?? summary.score[1]}` : "";
   title.textContent = `${summary.winner ? `${summary.winner} wins` : "draw"} ${score}`;
   const table = document.createElement("table");
   table.append(head, ...rows);
@@ -459,13 +554,17 @@ window.addEventListener("keydown", (e) => {
   } else if (e.key === " ") { togglePlay(); e.preventDefault(); }
   else if (e.key === "ArrowRight") timeline.step(1);
   else if (e.key === "ArrowLeft") timeline.step(-1);
+  else if (e.key === "l" && timeline.live) timeline.goLive();
   else if (e.key === "h") { hudHidden = !hudHidden; $("hud").classList.toggle("hidden", hudHidden); }
 });
 
 // The orbit camera: drag on the view to turn it round the ball (a drag in another camera switches to it),
 // the wheel to zoom.
 let dragFrom = null;
-$("view").addEventListener("pointerdown", (e) => { dragFrom = [e.clientX, e.clientY]; $("view").setPointerCapture(e.pointerId); });
+$("view").addEventListener("pointerdown", (e) => {
+  dragFrom = [e.clientX, e.clientY];
+  $("view").setPointerCapture(e.pointerId);
+});
 $("view").addEventListener("pointerup", () => { dragFrom = null; });
 $("view").addEventListener("pointermove", (e) => {
   if (!dragFrom) return;
@@ -496,6 +595,7 @@ function loop() {
   const started = performance.now();
   last = now;
   sendControls(); // gamepads have no events: read every frame
+  startInstantReplay();
   timeline.advance(dt, now);
   shown = timeline.current();
   if (shown) view.setObstacles(shown.x);
@@ -506,6 +606,10 @@ function loop() {
   stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
   stats.renders.push(now);
   while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
+  if (!SHARP && now - (stats.adaptedAt || 0) > 2) { // every 2 s, from the frame rate of those 2 s
+    stats.adaptedAt = now;
+    if (stats.renders.length > 2 && now - stats.renders[0] > 1.9) view.adaptResolution(rate(stats.renders));
+  }
   while (stats.arrivals.length && stats.arrivals[0] < now - 2) stats.arrivals.shift();
   requestAnimationFrame(loop);
 }
@@ -527,16 +631,26 @@ window.__view = {
   hudScore: () => [Number($("score-blue").textContent), Number($("score-orange").textContent)],
   banner: () => ($("banner").hidden ? null : $("banner").textContent),
   tick: () => timeline.playhead,
+  lastTick: () => timeline.lastTick,
+  // live: whether the view follows the newest state, and whether it shows a goal's instant replay
+  following: () => timeline.live && timeline.follow,
+  replaying: () => timeline.replaying,
   frameIndex: () => timeline.index(),
   mode: () => (source ? source.kind : null),
   // each car as drawn: [x, y, z, qx, qy, qz, qw, boost, flags], null for a car not in the game
   carStates: () => (shown ? shown.a.map((c) => (c ? [...c] : null)) : null),
   seat: () => (seat ? { ...seat } : null),
+  // the newest state received (not yet drawn, perhaps): its car `i`, and when it arrived (performance.now, ms)
+  newestCar: (i) => (timeline.frames.length ? timeline.frames[timeline.frames.length - 1].a[i] : null),
+  newestArrivalMs: () => timeline.lastArrival * 1000,
+  // the last inputs' round trips to the page server (ms)
+  inputAcksMs: () => [...ackMs],
   inputsSent: () => inputSeq,
   ballCam: () => view.ballCam,
   roster: () => roster,
   stats: () => ({ fps: rate(stats.renders), statesPerS: rate(stats.arrivals), frames: stats.frames,
-    bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs }),
+    bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs,
+    pixelRatio: view.renderer.getPixelRatio() }),
 };
 
 fetch("/arena.json").then((r) => r.json()).then((arena) => {

@@ -15,8 +15,35 @@ function toSceneQuaternion(x, y, z, w) { return [-y, -x, w, z]; }
 
 export const TEAM_COLORS = [0x2f7bff, 0xff8a1c];
 export const TRAIL_POINTS = 24;
+// Below MIN_FPS the view draws fewer pixels (down to MIN_PIXEL_RATIO, stretched to the canvas), above
+// RECOVER_FPS it draws more again: a slow (software) renderer stays smooth at the cost of sharpness.
+const MIN_FPS = 28, RECOVER_FPS = 50, MIN_PIXEL_RATIO = 0.6, PIXEL_STEP = 0.85;
 // how far off the view's axis the chased car may be, as a fraction of half the vertical field of view
 const CHASE_MAX_OFF_AXIS = 0.7;
+
+// The view's lights: a sky/ground hemisphere and a sun (directions in the drawn, mirrored scene).
+const SKY = 0xdde6ff, GROUND = 0x203020, HEMI_INTENSITY = 1.6, SUN_INTENSITY = 1.4, BACKGROUND = 0x0d1117;
+const SUN_AT = new THREE.Vector3(-3000, -2000, 8000);
+
+// Those lights' Lambert shading of `color`, worked out once per vertex: the large surfaces (walls, goals) are
+// drawn unlit with it, since a software renderer would shade each of their pixels every frame. With `over`, the
+// colour is blended over the background colour `over.color` as `over.opacity` would draw it (in sRGB, as the
+// canvas blends): an opaque wall that looks translucent wherever only the background is behind it.
+function bakeLight(geometry, color, over = null) {
+  const normal = geometry.attributes.normal, base = new THREE.Color(color), sun = SUN_AT.clone().normalize();
+  const sky = new THREE.Color(SKY), ground = new THREE.Color(GROUND), c = new THREE.Color();
+  const out = new Float32Array(normal.count * 3);
+  const back = over ? new THREE.Color(over.color).convertLinearToSRGB() : null, mixed = new THREE.Color();
+  for (let i = 0; i < normal.count; i++) {
+    const nx = normal.getX(i), ny = normal.getY(i), nz = normal.getZ(i);
+    const direct = (SUN_INTENSITY / Math.PI) * Math.max(0, nx * sun.x + ny * sun.y + nz * sun.z);
+    c.copy(ground).lerp(sky, 0.5 * nz + 0.5).multiplyScalar(HEMI_INTENSITY / Math.PI).addScalar(direct).multiply(base);
+    if (over) c.copy(mixed.copy(back).lerp(c.convertLinearToSRGB(), over.opacity)).convertSRGBToLinear();
+    out[3 * i] = c.r; out[3 * i + 1] = c.g; out[3 * i + 2] = c.b;
+  }
+  geometry.setAttribute("color", new THREE.BufferAttribute(out, 3));
+  return geometry;
+}
 
 function arenaMeshes(arena) {
   // Colour the physics' triangles by where they are: floor, goal boxes (by team) and the rest of the shell.
@@ -43,12 +70,14 @@ function arenaMeshes(arena) {
   const out = new THREE.Group();
   // the floor is flat: one colour, no per-pixel lighting (the largest area on screen; software renderers care)
   out.add(new THREE.Mesh(make(groups.floor), new THREE.MeshBasicMaterial({ color: 0x2f5e3c })));
-  // Faces point into the field: from a camera outside it, the near walls and the ceiling are culled away.
-  out.add(new THREE.Mesh(make(groups.shell), new THREE.MeshLambertMaterial({
-    color: 0x7d8fb3, transparent: true, opacity: 0.28, depthWrite: false })));
+  // Faces point into the field: from a camera outside it, the near walls and the ceiling are culled away. Only the
+  // background is behind the walls seen, so they are drawn opaque in the colour a 28% translucent wall would show:
+  // no blending, and what is behind them is never drawn.
+  out.add(new THREE.Mesh(bakeLight(make(groups.shell), 0x7d8fb3, { color: BACKGROUND, opacity: 0.28 }),
+    new THREE.MeshBasicMaterial({ vertexColors: true })));
   for (const team of [0, 1]) {
-    out.add(new THREE.Mesh(make(groups[`goal${team}`]), new THREE.MeshLambertMaterial({
-      color: TEAM_COLORS[team], transparent: true, opacity: 0.45, depthWrite: false, side: THREE.DoubleSide })));
+    out.add(new THREE.Mesh(bakeLight(make(groups[`goal${team}`]), TEAM_COLORS[team]), new THREE.MeshBasicMaterial({
+      vertexColors: true, transparent: true, opacity: 0.45, depthWrite: false, side: THREE.DoubleSide })));
   }
   const edges = new THREE.EdgesGeometry(make([...groups.shell, ...groups.goal0, ...groups.goal1]), 25);
   out.add(new THREE.LineSegments(edges, new THREE.LineBasicMaterial({ color: 0xb8c4dd, transparent: true,
@@ -68,60 +97,74 @@ function fieldLines(arena) {
   return new THREE.LineSegments(g, new THREE.LineBasicMaterial({ color: 0xcfe8d6, transparent: true, opacity: 0.5 }));
 }
 
+const PAD_LIT = new THREE.Color(0xffc93c), PAD_TAKEN = new THREE.Color(0x3a3f47);
+const HIDDEN = new THREE.Matrix4().makeScale(0, 0, 0);
+
+// The boost pads as three instanced meshes (small pads, big pads, big pads' orbs): three draw calls, not forty.
 function makePads(arena) {
   const group = new THREE.Group(), pads = [];
-  for (const [x, y, , big] of arena.pads) {
-    const r = big ? arena.pad_radius.big * 0.5 : arena.pad_radius.small * 0.45;
-    const pad = new THREE.Mesh(new THREE.CylinderGeometry(r, r, 10, big ? 24 : 12),
-      new THREE.MeshBasicMaterial({ color: 0xffc93c }));
-    pad.rotation.x = Math.PI / 2;
-    pad.position.set(...toScene(x, y, 6));
-    group.add(pad);
-    let orb = null;
-    if (big) {
-      orb = new THREE.Mesh(new THREE.SphereGeometry(60, 16, 12),
-        new THREE.MeshBasicMaterial({ color: 0xffb020, transparent: true, opacity: 0.75 }));
-      orb.position.set(...toScene(x, y, 120));
-      group.add(orb);
-    }
-    pads.push({ pad, orb, lit: true });
+  const counts = [arena.pads.filter((p) => !p[3]).length, arena.pads.filter((p) => p[3]).length];
+  const [small, big] = [false, true].map((isBig, k) => {
+    const r = isBig ? arena.pad_radius.big * 0.5 : arena.pad_radius.small * 0.45;
+    const disc = new THREE.CylinderGeometry(r, r, 10, isBig ? 24 : 12).rotateX(Math.PI / 2);
+    return new THREE.InstancedMesh(disc, new THREE.MeshBasicMaterial(), counts[k]);
+  });
+  const orbs = new THREE.InstancedMesh(new THREE.SphereGeometry(60, 16, 12),
+    new THREE.MeshBasicMaterial({ color: 0xffb020, transparent: true, opacity: 0.75 }), counts[1]);
+  const used = new Map([[small, 0], [big, 0]]);
+  for (const [x, y, , isBig] of arena.pads) {
+    const mesh = isBig ? big : small, at = used.get(mesh);
+    used.set(mesh, at + 1);
+    mesh.setMatrixAt(at, new THREE.Matrix4().makeTranslation(...toScene(x, y, 6)));
+    mesh.setColorAt(at, PAD_LIT);
+    const orb = isBig ? { at, matrix: new THREE.Matrix4().makeTranslation(...toScene(x, y, 120)) } : null;
+    if (orb) orbs.setMatrixAt(at, orb.matrix);
+    pads.push({ mesh, at, orb, lit: true });
   }
-  return { group, pads };
+  group.add(small, big, orbs);
+  return { group, pads, orbs };
+}
+
+// Parts [geometry, matrix, colour] as one geometry with vertex colours: one draw call for a car's body.
+function mergeParts(parts) {
+  const positions = [], normals = [], colors = [];
+  for (const [geometry, matrix, color] of parts) {
+    const g = geometry.toNonIndexed().applyMatrix4(matrix);
+    const c = new THREE.Color(color);
+    positions.push(...g.attributes.position.array);
+    normals.push(...g.attributes.normal.array);
+    for (let i = 0; i < g.attributes.position.count; i++) colors.push(c.r, c.g, c.b);
+  }
+  const merged = new THREE.BufferGeometry();
+  merged.setAttribute("position", new THREE.Float32BufferAttribute(positions, 3));
+  merged.setAttribute("normal", new THREE.Float32BufferAttribute(normals, 3));
+  merged.setAttribute("color", new THREE.Float32BufferAttribute(colors, 3));
+  return merged;
 }
 
 // A car from its hitbox (length, width, height, offset): body, cabin, nose, wheels, boost flame.
 function makeCar(hitbox, team) {
   const [l, w, h, ox, oy, oz] = hitbox;
-  const color = TEAM_COLORS[team];
+  const paint = new THREE.Color(TEAM_COLORS[team]).lerp(new THREE.Color(0xffffff), 0.15);
+  const white = 0xf4f7fb, dark = 0x1b2330, tyre = 0x111111;
+  const at = (x, y, z) => new THREE.Matrix4().makeTranslation(x, y, z);
+  // body, cabin, the white stripe and nose that show the heading at a glance, spoiler, wheels
+  const parts = [
+    [new THREE.BoxGeometry(l, w, h * 0.55), at(0, 0, -h * 0.12), paint],
+    [new THREE.BoxGeometry(l * 0.45, w * 0.8, h * 0.45), at(-l * 0.1, 0, h * 0.3), dark],
+    [new THREE.BoxGeometry(l * 0.5, w * 0.18, h * 0.04), at(l * 0.24, 0, h * 0.17), white],
+    [new THREE.BoxGeometry(l * 0.06, w * 0.9, h * 0.3), at(l * 0.49, 0, -h * 0.12), white],
+    [new THREE.BoxGeometry(l * 0.08, w, h * 0.12), at(-l * 0.47, 0, h * 0.32), paint],
+  ];
+  for (const sx of [0.32, -0.32]) for (const sy of [0.5, -0.5]) {
+    parts.push([new THREE.CylinderGeometry(h * 0.42, h * 0.42, w * 0.18, 14), at(sx * l, sy * w, -h * 0.35), tyre]);
+  }
   const car = new THREE.Group();
   const body = new THREE.Group();
   body.position.set(ox, oy, oz);
   car.add(body);
-  const paint = new THREE.MeshLambertMaterial({ color, emissive: color, emissiveIntensity: 0.35 });
-  const chassis = new THREE.Mesh(new THREE.BoxGeometry(l, w, h * 0.55), paint);
-  chassis.position.z = -h * 0.12;
-  body.add(chassis);
-  const cabin = new THREE.Mesh(new THREE.BoxGeometry(l * 0.45, w * 0.8, h * 0.45),
-    new THREE.MeshLambertMaterial({ color: 0x1b2330 }));
-  cabin.position.set(-l * 0.1, 0, h * 0.3);
-  body.add(cabin);
-  // what shows the heading at a glance: a white stripe from the cabin to a white nose
-  const white = new THREE.MeshBasicMaterial({ color: 0xf4f7fb });
-  const stripe = new THREE.Mesh(new THREE.BoxGeometry(l * 0.5, w * 0.18, h * 0.04), white);
-  stripe.position.set(l * 0.24, 0, h * 0.17);
-  body.add(stripe);
-  const nose = new THREE.Mesh(new THREE.BoxGeometry(l * 0.06, w * 0.9, h * 0.3), white);
-  nose.position.set(l * 0.49, 0, -h * 0.12);
-  body.add(nose);
-  const spoiler = new THREE.Mesh(new THREE.BoxGeometry(l * 0.08, w, h * 0.12), paint);
-  spoiler.position.set(-l * 0.47, 0, h * 0.32);
-  body.add(spoiler);
-  const tyre = new THREE.MeshLambertMaterial({ color: 0x111111 });
-  for (const sx of [0.32, -0.32]) for (const sy of [0.5, -0.5]) {
-    const wheel = new THREE.Mesh(new THREE.CylinderGeometry(h * 0.42, h * 0.42, w * 0.18, 14), tyre);
-    wheel.position.set(sx * l, sy * w, -h * 0.35);
-    body.add(wheel);
-  }
+  body.add(new THREE.Mesh(mergeParts(parts), new THREE.MeshLambertMaterial({ vertexColors: true,
+    emissive: TEAM_COLORS[team], emissiveIntensity: 0.25 })));
   const flame = new THREE.Mesh(new THREE.ConeGeometry(w * 0.2, l * 0.7, 12),
     new THREE.MeshBasicMaterial({ color: 0xffa53a, transparent: true, opacity: 0.85,
       blending: THREE.AdditiveBlending, depthWrite: false }));
@@ -139,12 +182,13 @@ export class View {
   constructor(canvas) {
     this.canvas = canvas;
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: false, powerPreference: "high-performance" });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 1.5));
+    this.maxPixelRatio = Math.min(window.devicePixelRatio || 1, 1.5);
+    this.renderer.setPixelRatio(this.maxPixelRatio);
     this.scene = new THREE.Scene();
-    this.scene.background = new THREE.Color(0x0d1117);
-    this.scene.add(new THREE.HemisphereLight(0xdde6ff, 0x203020, 1.6));
-    const sun = new THREE.DirectionalLight(0xffffff, 1.4);
-    sun.position.set(-3000, -2000, 8000);
+    this.scene.background = new THREE.Color(BACKGROUND);
+    this.scene.add(new THREE.HemisphereLight(SKY, GROUND, HEMI_INTENSITY));
+    const sun = new THREE.DirectionalLight(0xffffff, SUN_INTENSITY);
+    sun.position.copy(SUN_AT);
     this.scene.add(sun);
     this.camera = new THREE.PerspectiveCamera(55, 1, 20, 40000);
     this.cameraMode = "broadcast";
@@ -164,9 +208,10 @@ export class View {
     this.arena = arena;
     this.scene.add(arenaMeshes(arena));
     this.scene.add(fieldLines(arena));
-    const { group, pads } = makePads(arena);
+    const { group, pads, orbs } = makePads(arena);
     this.scene.add(group);
     this.pads = pads;
+    this.orbs = orbs;
     const r = arena.ball_radius;
     this.ball = new THREE.Mesh(new THREE.SphereGeometry(r, 24, 16),
       new THREE.MeshLambertMaterial({ color: 0xf2f2f2, emissive: 0x555555 }));
@@ -208,6 +253,15 @@ export class View {
     if (index !== undefined) this.chaseIndex = index;
   }
 
+  // Fewer or more pixels for the frame rate `fps` the page measured over the last seconds.
+  adaptResolution(fps) {
+    const now = this.renderer.getPixelRatio();
+    let next = now;
+    if (fps < MIN_FPS) next = Math.max(MIN_PIXEL_RATIO, now * PIXEL_STEP);
+    else if (fps > RECOVER_FPS) next = Math.min(this.maxPixelRatio, now / PIXEL_STEP);
+    if (Math.abs(next - now) > 1e-3) this.renderer.setPixelRatio(next);
+  }
+
   resize() {
     const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
     if (this.canvas.width !== Math.floor(w * this.renderer.getPixelRatio()) || this._h !== h) {
@@ -241,14 +295,18 @@ export class View {
       col.setXYZ(i, 0.05 + 0.9 * k, 0.05 + 0.85 * k, 0.08 + 0.6 * k);
     }
     pos.needsUpdate = true; col.needsUpdate = true;
-    if (this.pads) {
+    if (this.pads && s.p !== this.padMask) {
+      this.padMask = s.p;
       const mask = BigInt(s.p);
       this.pads.forEach((p, i) => {
         const lit = ((mask >> BigInt(i)) & 1n) === 1n;
-        if (lit !== p.lit) {
-          p.lit = lit;
-          p.pad.material.color.set(lit ? 0xffc93c : 0x3a3f47);
-          if (p.orb) p.orb.visible = lit;
+        if (lit === p.lit) return;
+        p.lit = lit;
+        p.mesh.setColorAt(p.at, lit ? PAD_LIT : PAD_TAKEN);
+        p.mesh.instanceColor.needsUpdate = true;
+        if (p.orb) {
+          this.orbs.setMatrixAt(p.orb.at, lit ? p.orb.matrix : HIDDEN);
+          this.orbs.instanceMatrix.needsUpdate = true;
         }
       });
     }
@@ -335,7 +393,8 @@ export class View {
       if (this.arena) { // stay on the field's side of the walls (a camera box, not the arena's shape)
         const f = this.arena.field;
         pos.set(THREE.MathUtils.clamp(pos.x, 150 - f.extent_x, f.extent_x - 150),
-          THREE.MathUtils.clamp(pos.y, 150 - f.extent_y, f.extent_y - 150), THREE.MathUtils.clamp(pos.z, 60, f.height - 100));
+          THREE.MathUtils.clamp(pos.y, 150 - f.extent_y, f.extent_y - 150),
+          THREE.MathUtils.clamp(pos.z, 60, f.height - 100));
       }
       target = this.ballCam ? new THREE.Vector3().copy(ball).lerp(car, 0.25)
         : new THREE.Vector3().copy(car).addScaledVector(away, -1500);

@@ -1,10 +1,13 @@
 // Frames on a tick axis and a playhead that moves along it: the page draws the state interpolated at the
 // playhead, so motion is smooth at the display's rate whatever the rate of the states (at most 30 a second).
 // Live: the playhead follows the newest frame about LIVE_LAG_S behind, its speed adapting to the rate the
-// ticks arrive at. Replay: it moves at the replay's tick rate times the chosen speed, and seeks and steps.
+// ticks arrive at; a player's own match is drawn at its newest frame (their keys' effect as soon as it arrives).
+// A spectator may leave the live edge (pause, seek and step within the last LIVE_KEEP_S, or an instant replay)
+// and come back to it. Replay: it moves at the replay's tick rate times the chosen speed, and seeks and steps.
 
 const LIVE_LAG_S = 0.12;
-const LIVE_KEEP_S = 4;
+const LIVE_KEEP_S = 60;
+const LIVE_KEEP_EVENTS = 500;
 const TELEPORT_UU = 1200; // a car or the ball that jumped further than this between frames is not interpolated
 
 export const FLAG_DEMOED = 1, FLAG_BOOSTING = 2, FLAG_SUPERSONIC = 4;
@@ -80,6 +83,8 @@ export class Timeline {
     this.lastArrival = 0;
     this.arrivalGap = 1 / 15;
     this.ended = false;
+    this.follow = true;       // live: the playhead follows the newest frame (false: paused or rewound)
+    this.replayUntil = null;  // live: an instant replay's last tick, then back to the newest frame
   }
 
   // ------------------------------------------------------------------ live
@@ -105,12 +110,32 @@ export class Timeline {
     this.lastArrival = now;
     const keepTicks = LIVE_KEEP_S * Math.max(this.ticksPerS || this.tickRate, this.tickRate);
     while (this.frames.length > 2 && this.frames[0].t < frame.t - keepTicks) this.frames.shift();
-    while (this.events.length > 50) this.events.shift();
+    while (this.events.length > LIVE_KEEP_EVENTS) this.events.shift();
+    if (this.playhead < this.firstTick) this.playhead = this.firstTick; // paused past the buffer's start
   }
 
-  // Live: how far behind the newest state the playhead aims to be, in seconds. A player sees their car one
-  // state's interval behind (sooner, at the cost of a stutter when a state comes late); a spectator LIVE_LAG_S.
-  lagS() { return this.asPlayer ? Math.min(LIVE_LAG_S, 1.1 * this.arrivalGap) : LIVE_LAG_S; }
+  // Live: how far behind the newest state the playhead aims to be, in seconds. A player sees the newest state
+  // (no jitter buffer: their input's effect drawn at once, at the cost of a stutter when a state comes late);
+  // a spectator LIVE_LAG_S behind, for smooth motion.
+  lagS() { return this.asPlayer ? 0 : LIVE_LAG_S; }
+
+  // Live: leave the live edge where the playhead is (paused, or moved by seek and step) ...
+  holdLive() { this.follow = false; this.replayUntil = null; }
+
+  // ... and follow the newest frame again.
+  goLive() {
+    this.follow = true; this.playing = true; this.speed = 1; this.replayUntil = null;
+    this.playhead = Math.max(this.firstTick, this.lastTick - this.lagS() * (this.ticksPerS || this.tickRate));
+  }
+
+  // Live: play the buffer's [fromTick, untilTick] again at normal speed, then follow the newest frame again.
+  instantReplay(fromTick, untilTick) {
+    this.follow = false; this.playing = true; this.speed = 1;
+    this.playhead = Math.max(fromTick, this.firstTick);
+    this.replayUntil = untilTick;
+  }
+
+  get replaying() { return this.live && this.replayUntil !== null; }
 
   addEvents(events) {
     const last = this.frames[this.frames.length - 1];
@@ -134,6 +159,7 @@ export class Timeline {
 
   // One decision (recorded state) forward or back from the playhead.
   step(direction) {
+    if (this.live) this.holdLive();
     this.playing = false;
     const f = this.frames;
     if (!f.length) return;
@@ -150,7 +176,9 @@ export class Timeline {
   // ------------------------------------------------------------------ both
   advance(dt, now) {
     if (!this.frames.length) return;
-    if (this.live) {
+    if (this.live && this.follow && this.asPlayer) {
+      this.playhead = this.lastTick;
+    } else if (this.live && this.follow) {
       const rate = this.ticksPerS || this.tickRate;
       const quiet = now - this.lastArrival > 2.5 * this.arrivalGap + 0.05; // nothing new: show the newest
       const target = quiet ? this.lastTick : this.lastTick - this.lagS() * rate;
@@ -160,7 +188,8 @@ export class Timeline {
       this.playhead = Math.min(this.playhead, this.lastTick);
     } else if (this.playing) {
       this.playhead += dt * this.tickRate * this.speed;
-      if (this.playhead >= this.lastTick) { this.playhead = this.lastTick; this.playing = false; }
+      if (this.live && this.playhead >= Math.min(this.lastTick, this.replayUntil ?? Infinity)) this.goLive();
+      else if (this.playhead >= this.lastTick) { this.playhead = this.lastTick; this.playing = false; }
     }
   }
 
@@ -183,9 +212,13 @@ export class Timeline {
 
   // The frame index at or before the playhead (the timeline's "decision").
   index() {
-    let i = 0;
-    while (i + 1 < this.frames.length && this.frames[i + 1].t <= this.playhead + 1e-6) i++;
-    return i;
+    const f = this.frames;
+    let lo = 0, hi = f.length - 1;
+    while (lo < hi) {
+      const mid = (lo + hi + 1) >> 1;
+      if (f[mid].t <= this.playhead + 1e-6) lo = mid; else hi = mid - 1;
+    }
+    return lo;
   }
 
   shownEvents(n) {

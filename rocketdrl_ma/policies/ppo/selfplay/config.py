@@ -5,22 +5,25 @@ its meaning in the field's docstring."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Annotated, Any
 
 from rocketdrl_ma.config import resolve_shipped_path
 from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS, check_bot
-from rocketdrl_ma.validation import check_choice, check_int, check_number, section_values
+from rocketdrl_ma.validation import Check, Expect, OneOf, Range, check_value
 
 from .pfsp import WEIGHTINGS
 
 SIDES = ("alternate", "blue", "orange")
+Positive = Annotated[int, Range(minimum=1)]
 
 
-def check_checkpoint_path(field: str, path: str) -> None:
-    """A ValueError naming ``field`` unless ``path`` (as given, or a shipped one) is a checkpoint with its JSON beside
-    it: looked up at config load, so a wrong path fails before any worker starts."""
+def check_checkpoint_path(field: str, path: str) -> str:
+    """``path`` if it (as given, or a shipped one) is a checkpoint with its JSON beside it, else a ValueError naming
+    ``field``: looked up at config load, so a wrong path fails before any worker starts."""
     found = resolve_shipped_path(path, field)
     if not found.with_name(found.name.removesuffix(".pt") + ".json").is_file():
         raise ValueError(f"{field}: checkpoint {str(found)!r} has no JSON of its config beside it")
+    return path
 
 
 def check_teacher(field: str, name: object) -> str:
@@ -39,83 +42,59 @@ def check_teacher(field: str, name: object) -> str:
                      "'scripted:NAME') nor 'checkpoint:PATH'")
 
 
+Teacher = Annotated[str, Check(check_teacher)]
+
+
 @dataclass(frozen=True)
 class ImitateConfig:
     """A warm start: clone a scripted bot before the first PPO update, then refine the clone by DAgger rounds."""
 
-    bot: str = "ball_chaser"
+    bot: Teacher = "ball_chaser"
     """the teacher to clone: a scripted bot's name, or a policy spec (``checkpoint:PATH``: a trained policy
     labels through its own sensors and actions)"""
-    opponent: str = "ball_chaser"
+    opponent: Teacher = "ball_chaser"
     """the bot (or policy spec) it plays against while it is recorded (a game with one team has none)"""
-    decisions: int = 30_000
+    decisions: Positive = 30_000
     """env decisions recorded for the first fit"""
-    epochs: int = 20
+    epochs: Positive = 20
     """passes of the first fit over them"""
-    dagger_rounds: int = 0
+    dagger_rounds: Annotated[int, Range(minimum=0)] = 0
     """DAgger rounds after it: the clone drives (the bot takes over a decision with probability 1/2, 1/4, ...)
     and every state it visits is labelled with the bot's action; 0: none"""
-    dagger_decisions: int = 10_000
+    dagger_decisions: Positive = 10_000
     """env decisions of each round"""
-
-
-def check_imitate(section: object, name: str = "selfplay.imitate") -> ImitateConfig | None:
-    """The ``imitate`` mapping (``selfplay.imitate``, or a single-team game's top-level ``imitate``, as ``name``
-    says) with defaults; empty or null: no warm start."""
-    values = section_values(name, section, ImitateConfig)
-    if not section:
-        return None
-    for key in ("bot", "opponent"):
-        check_teacher(f"{name}.{key}", values[key])
-    for key in ("decisions", "epochs", "dagger_decisions"):
-        check_int(f"{name}.{key}", values[key], minimum=1)
-    check_int(f"{name}.dagger_rounds", values["dagger_rounds"], minimum=0)
-    return ImitateConfig(**values)
 
 
 @dataclass(frozen=True)
 class KickstartConfig:
     """A scripted teacher whose actions on the learner's own states add a fading distillation term to PPO's loss."""
 
-    bot: str = "ball_chaser"
+    bot: Teacher = "ball_chaser"
     """the teacher: a scripted bot's name, or a policy spec (``checkpoint:PATH``)"""
-    weight: float = 1.0
+    weight: Annotated[float, Range(above=0.0)] = 1.0
     """the distillation term's weight at agent step 0"""
-    decay_steps: int | None = 5_000_000
+    decay_steps: Positive | None = 5_000_000
     """agent steps (of the whole run) over which the weight falls linearly to 0; null: it stays constant"""
-
-
-def check_kickstart(section: object, name: str = "selfplay.kickstart") -> KickstartConfig | None:
-    """The ``kickstart`` mapping (``selfplay.kickstart``, or a single-team game's top-level ``kickstart``, as
-    ``name`` says) with defaults; empty or null: no teacher."""
-    values = section_values(name, section, KickstartConfig)
-    if not section:
-        return None
-    check_teacher(f"{name}.bot", values["bot"])
-    values["weight"] = check_number(f"{name}.weight", values["weight"], above=0.0)
-    if values["decay_steps"] is not None:
-        check_int(f"{name}.decay_steps", values["decay_steps"], minimum=1)
-    return KickstartConfig(**values)
 
 
 @dataclass(frozen=True)
 class SelfPlayConfig:
     """One team learns against an opponent pool of its own snapshots and scripted bots (``pool.py``)."""
 
-    snapshot_interval: int = 200_000
+    snapshot_interval: Positive = 200_000
     """agent steps between snapshots of the learner; each becomes a playable checkpoint
     (``RUN_DIR/snapshots/step_N.pt``) and an opponent in the pool"""
-    pool_size: int = 10
+    pool_size: Positive = 10
     """how many of the most recent snapshots stay in the pool"""
-    scripted: tuple[str, ...] = ("ball_chaser",)
+    scripted: Annotated[tuple[Any, ...], Expect("a list of scripted bots"), Check(_check_bots)] = ("ball_chaser",)
     """scripted bots that are always in the pool (``scripted:<name>``: ``ball_chaser``, ``goalie``, ...)"""
-    self_play: float = 0.2
+    self_play: Annotated[float, Range(0.0, 1.0)] = 0.2
     """share of episodes against the current policy itself (not through PFSP)"""
-    weighting: str = "hard"
+    weighting: Annotated[str, OneOf(WEIGHTINGS)] = "hard"
     """prioritised fictitious self-play over the pool (``pfsp.py``): ``hard`` or ``variance``"""
-    p: float = 2.0
+    p: Annotated[float, Range(above=0.0)] = 2.0
     """the exponent of ``hard``'s ``(1 - x) ** p``"""
-    window: int = 50
+    window: Positive = 50
     """recent matches against an opponent behind the learner's win rate against it"""
     imitate: ImitateConfig | None = None
     """clone a scripted bot before the first update, then refine the clone by DAgger rounds (``imitation.py``);
@@ -123,11 +102,12 @@ class SelfPlayConfig:
     kickstart: KickstartConfig | None = None
     """a scripted teacher whose actions on the learner's own states add a distillation term to PPO's loss, fading
     out over ``decay_steps`` (``kickstart.py``); null: none"""
-    side: str = "alternate"
+    side: Annotated[str, OneOf(SIDES)] = "alternate"
     """``alternate`` (the learner swaps teams every episode: one policy for both, as in a match) or ``blue`` /
     ``orange``: the learner always plays that team, for a game whose teams have different jobs (the penalty
     duel's shooter and keeper, ``policies/duel.py``)"""
-    opponent_runs: tuple[str, ...] = ()
+    opponent_runs: Annotated[tuple[Annotated[str, Check(_check_run_dir)], ...],
+                             Expect("a list of run directories")] = ()
     """run directories of *another* learner; the snapshot slots then hold the newest snapshots of those runs
     (re-read at every snapshot interval) instead of this run's own, which are still written for the other learner
     to read. Their networks must be shaped like this learner's. Empty: this run's own"""
@@ -136,23 +116,14 @@ class SelfPlayConfig:
 def check_selfplay(section: object) -> SelfPlayConfig | None:
     """The ``selfplay`` mapping with defaults filled in and every value checked (ValueError names the key and the
     allowed values); empty or null: no self-play."""
-    values = section_values("selfplay", section, SelfPlayConfig)
-    if not section:
-        return None
-    for key in ("snapshot_interval", "pool_size", "window"):
-        check_int(f"selfplay.{key}", values[key], minimum=1)
-    values["self_play"] = check_number("selfplay.self_play", values["self_play"], 0.0, 1.0)
-    values["p"] = check_number("selfplay.p", values["p"], above=0.0)
-    check_choice("selfplay.weighting", values["weighting"], WEIGHTINGS)
-    bots = values["scripted"]
-    if not isinstance(bots, (list, tuple)):
-        raise ValueError(f"selfplay.scripted: expected a list of scripted bots, got {bots!r}")
-    values["scripted"] = tuple(check_bot("selfplay.scripted", bot) for bot in bots)
-    check_choice("selfplay.side", values["side"], SIDES)
-    runs = values["opponent_runs"]
-    if not isinstance(runs, (list, tuple)) or not all(isinstance(run, str) and run for run in runs):
-        raise ValueError(f"selfplay.opponent_runs: expected a list of run directories, got {runs!r}")
-    values["opponent_runs"] = tuple(runs)
-    values["imitate"] = check_imitate(values["imitate"])
-    values["kickstart"] = check_kickstart(values["kickstart"])
-    return SelfPlayConfig(**values)
+    return check_value("selfplay", section, SelfPlayConfig | None)
+
+
+def _check_bots(field: str, bots: tuple) -> tuple[str, ...]:
+    return tuple(check_bot(field, bot) for bot in bots)
+
+
+def _check_run_dir(field: str, run: str) -> str:
+    if not run:
+        raise ValueError(f"{field}: expected a run directory, got {run!r}")
+    return run
