@@ -86,6 +86,7 @@ def _run_curve(args: argparse.Namespace) -> int:
     if args.checkpoints and not args.out:
         raise SystemExit("league-curve: --checkpoints needs --out DIR (where the results and the curve go)")
     out = Path(args.out) if args.out else Path(args.run_dir) / "rating_curve"
+    title = f"{cfg.name}: {Path(args.run_dir).name if args.run_dir else 'checkpoints'}"
 
     def show(match, result) -> None:
         print(f"{match.key}: {match.blue} {result.score_blue} - {result.score_orange} {match.orange}", flush=True)
@@ -101,7 +102,7 @@ def _run_curve(args: argparse.Namespace) -> int:
             if points != rated:
                 rated = points
                 write_curve_json(points, out / "curve.json")
-                plot_curve(cfg, points, out / "curve.png", f"{cfg.name}: {args.run_dir or 'checkpoints'}")
+                plot_curve(cfg, points, out / "curve.png", title)
                 write_tensorboard(points, out / "tensorboard")
                 for p in points:
                     vs = "  ".join(f"{name} {share:.2f}" for name, share in p.points.items())
