@@ -82,7 +82,8 @@ def _run_curve(args: argparse.Namespace) -> int:
             print(f'  - {{name: {a.name}, policy: "{a.policy}", mu: {mu:.2f}, sigma: {sigma:.2f}}}')
         return 0
     if (args.run_dir is None) == (not args.checkpoints):
-        raise SystemExit("league-curve: give a training run (--run-dir DIR) or checkpoints (--checkpoints A.pt B.pt ...)")
+        raise SystemExit("league-curve: give a training run (--run-dir DIR) or checkpoints "
+                         "(--checkpoints A.pt B.pt ...)")
     if args.checkpoints and not args.out:
         raise SystemExit("league-curve: --checkpoints needs --out DIR (where the results and the curve go)")
     out = Path(args.out) if args.out else Path(args.run_dir) / "rating_curve"
