@@ -21,7 +21,7 @@ from setuptools.command.build_py import build_py
 
 ROOT = Path(__file__).resolve().parent
 #: folder -> the files of it that ship (glob patterns); keep the folders in step with config.SHIPPED_FOLDERS
-SHIPPED = {"matches": ["*.yaml"], "minigames": ["*.yaml"], "server": ["*.yaml"], "leagues": ["*.yaml", "*.jsonl"],
+SHIPPED = {"matches": ["*.yaml"], "minigames": ["*.yaml"], "server": ["*.yaml"], "leagues": ["*.yaml", "*.jsonl", "curves/*.yaml"],
            "policies": ["*.yaml", "checkpoints/*.pt", "checkpoints/*.json"]}
 #: what of node_modules the page imports (rocketdrl_ma/web/bridge.py: vendor_files) and the licences
 WEB_VENDOR = ["three/build/three.module.js", "three/build/three.core.js", "three/LICENSE", "three/package.json",

@@ -141,18 +141,21 @@ def test_a_config_made_in_python_is_checked_as_a_yaml_would_be():
 # every shipped config through the loader its folder's files are read by
 def _loader(name: str):
     from rocketdrl_ma.league.config import load_league_config
+    from rocketdrl_ma.league.curve_config import load_curve_config
     from rocketdrl_ma.policies.ppo.config import load_train_config
     from rocketdrl_ma.server.router import RouterSettings
     from rocketdrl_ma.server.settings import ClientSettings, ServerSettings
 
     folder, file = name.split("/", 1)
+    if folder == "leagues" and file.startswith("curves/"):
+        return load_curve_config
     if folder == "server":
         return {"client.yaml": ClientSettings.load, "router.yaml": RouterSettings.load}.get(file, ServerSettings.load)
     return {"matches": load_config, "minigames": load_config, "policies": load_train_config,
             "leagues": load_league_config}[folder]
 
 
-SHIPPED_CONFIGS = [name for name in shipped_files() if name.count("/") == 1]
+SHIPPED_CONFIGS = [name for name in shipped_files() if name.count("/") == 1 or name.startswith("leagues/curves/")]
 
 
 def test_the_shipped_configs_are_found():

@@ -1,4 +1,4 @@
-"""``rocketdrl-ma league CONFIG`` and ``rocketdrl-ma league-bot`` (standard library at the top)."""
+"""``rocketdrl-ma league CONFIG``, ``league-curve`` and ``league-bot`` (standard library at the top)."""
 from __future__ import annotations
 
 import argparse
@@ -59,6 +59,77 @@ def _verify(cfg, path: str, workers: int, at_once: int) -> int:
     return 1 if differences else 0
 
 
+def _run_curve(args: argparse.Namespace) -> int:
+    import time
+    from pathlib import Path
+
+    from rocketdrl_ma.league.batch_play import DEFAULT_AT_ONCE
+    from rocketdrl_ma.league.curve import (pin_anchors, play_snapshots, rating_curve, read_snapshot, run_snapshots,
+                                           write_curve_json)
+    from rocketdrl_ma.league.curve_config import load_curve_config
+    from rocketdrl_ma.league.curve_plot import plot_curve, write_tensorboard
+    from rocketdrl_ma.results import ResultsStore
+
+    cfg = load_curve_config(args.config)
+    at_once = DEFAULT_AT_ONCE if args.at_once is None else args.at_once
+    if args.pin_anchors:
+        out = Path(args.out or f"runs/league/{cfg.name}-anchors")
+        with ResultsStore(out / "results.sqlite") as store:
+            pinned = pin_anchors(cfg, store, out, args.workers, at_once)
+        print(f"anchors:  # pinned by `rocketdrl-ma league-curve {args.config} --pin-anchors`")
+        for a in cfg.anchors:
+            mu, sigma = pinned[a.name]
+            print(f'  - {{name: {a.name}, policy: "{a.policy}", mu: {mu:.2f}, sigma: {sigma:.2f}}}')
+        return 0
+    if (args.run_dir is None) == (not args.checkpoints):
+        raise SystemExit("league-curve: give a training run (--run-dir DIR) or checkpoints "
+                         "(--checkpoints A.pt B.pt ...)")
+    if args.checkpoints and not args.out:
+        raise SystemExit("league-curve: --checkpoints needs --out DIR (where the results and the curve go)")
+    out = Path(args.out) if args.out else Path(args.run_dir) / "rating_curve"
+    title = f"{cfg.name}: {Path(args.run_dir).name if args.run_dir else 'checkpoints'}"
+
+    def show(match, result) -> None:
+        print(f"{match.key}: {match.blue} {result.score_blue} - {result.score_orange} {match.orange}", flush=True)
+
+    with ResultsStore(out / "results.sqlite") as store:
+        rated: list = []
+        trainer_gone = False
+        while True:
+            snapshots = (run_snapshots(Path(args.run_dir), args.final) if args.run_dir
+                         else [read_snapshot(Path(p)) for p in args.checkpoints])
+            play_snapshots(cfg, snapshots, store, out, args.workers, at_once, on_result=show)
+            points = rating_curve(cfg, snapshots, store)
+            if points != rated:
+                rated = points
+                write_curve_json(points, out / "curve.json")
+                plot_curve(cfg, points, out / "curve.png", title)
+                write_tensorboard(points, out / "tensorboard")
+                for p in points:
+                    vs = "  ".join(f"{name} {share:.2f}" for name, share in p.points.items())
+                    print(f"{p.snapshot:>16} {p.agent_steps:>12,} steps  rating {p.mu:6.2f} "
+                          f"[{p.low:6.2f}, {p.high:6.2f}]  points/match: {vs}", flush=True)
+                print(f"curve: {out / 'curve.png'}, {out / 'curve.json'}, TensorBoard {out / 'tensorboard'}",
+                      flush=True)
+            if not args.follow or any(s.name == "final" for s in snapshots) or trainer_gone:
+                return 0
+            time.sleep(args.poll_s)
+            # a training that died writes no final checkpoint: rate what it left, once more, then stop
+            trainer_gone = args.follow_pid is not None and not _alive(args.follow_pid)
+
+
+def _alive(pid: int) -> bool:
+    import os
+
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process of that number: alive, only not ours to signal
+        pass
+    return True
+
+
 def _run_league_bot(args: argparse.Namespace) -> int:
     from rocketdrl_ma.server.bot import PolicyBot
 
@@ -111,6 +182,25 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
                    help="play every match recorded in FILE again (no results store) and compare every field and "
                         "the ratings bit for bit; exit status 1 if anything differs")
     p.set_defaults(run=_run_league)
+    c = sub.add_parser("league-curve", help="a training run's rating curve: every snapshot against pinned anchors")
+    c.add_argument("config", help="curve YAML, e.g. leagues/curve_2v2.yaml")
+    c.add_argument("--run-dir", default=None, help="a training run's folder (its snapshots/ and final.pt)")
+    c.add_argument("--checkpoints", nargs="+", default=None, metavar="PT", help="rate these checkpoints instead")
+    c.add_argument("--out", default=None,
+                   help="where the results store, curve.json, curve.png and the TensorBoard events go "
+                        "(default: RUN_DIR/rating_curve)")
+    c.add_argument("--follow", action="store_true",
+                   help="keep rating the run's new snapshots as training writes them, until its final.pt is rated")
+    c.add_argument("--poll-s", type=float, default=60.0, help="--follow: seconds between looks for new snapshots")
+    c.add_argument("--final", default=None, metavar="PT",
+                   help="the run's final checkpoint, the curve's last point (default RUN_DIR/final.pt)")
+    c.add_argument("--follow-pid", type=int, default=None, metavar="PID",
+                   help="--follow: the training's process; once it is gone, rate what it left and stop")
+    c.add_argument("--pin-anchors", action="store_true",
+                   help="play the anchors' round robin and print their ratings to pin in the config")
+    c.add_argument("--workers", type=int, default=0, help="share the matches among this many processes")
+    c.add_argument("--at-once", type=int, default=None, metavar="N", help="matches each process plays at once")
+    c.set_defaults(run=_run_curve)
     b = sub.add_parser("league-bot", help="a remote league entrant: wait for invitations, play them on the server")
     b.add_argument("--entrant", required=True, help="the entrant's name in the league YAML (remote: true)")
     b.add_argument("--policy", required=True, help="a load_policy spec, e.g. checkpoint:PATH")

@@ -20,6 +20,7 @@ def _run_train(args: argparse.Namespace) -> int:
     name = Path(args.config).stem
     run_dir = Path(args.run_dir or Path("runs") / name)
     out = Path(args.out or run_dir / "final.pt")
+    curve = _start_rating_curve(args.rating_curve, run_dir, out) if args.rating_curve else None
     watch = None
     if cfg.watch_every:  # evaluation episodes for `rocketdrl-ma web`, published on Zenoh
         from rocketdrl_ma.web.training import broadcast_from_train_config
@@ -29,7 +30,28 @@ def _run_train(args: argparse.Namespace) -> int:
     for steps, success, ret, episodes in result.history:
         print(f"steps {steps:>10,d}  success {success:6.1%}  return {ret:+8.2f}  episodes {episodes}")
     print(f"checkpoint: {result.checkpoint} ({result.agent_steps:,d} agent steps); TensorBoard logs: {run_dir}")
+    if curve is not None:
+        print(f"rating curve: rating the final checkpoint in the background (pid {curve.pid}); it writes "
+              f"{run_dir / 'rating_curve'} and logs to {run_dir / 'rating_curve.log'}")
     return 0
+
+
+def _start_rating_curve(config: str, run_dir: Path, final: Path):
+    """``league-curve CONFIG --follow`` on this run in its own process (a background league): it rates each snapshot
+    as it is written and the final checkpoint, and stops if this training dies first."""
+    import os
+    import subprocess
+    import sys
+
+    from rocketdrl_ma.league.curve_config import load_curve_config
+
+    load_curve_config(config)  # a bad curve config fails now, not after the training
+    run_dir.mkdir(parents=True, exist_ok=True)
+    command = [sys.executable, "-m", "rocketdrl_ma.cli", "league-curve", config, "--run-dir", str(run_dir),
+               "--final", str(final), "--follow", "--follow-pid", str(os.getpid()), "--poll-s", "30"]
+    with open(run_dir / "rating_curve.log", "a") as log:
+        # its own session: a Ctrl-C of the training stops the training, and the curve rates what it left
+        return subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
 
 def _run_eval(args: argparse.Namespace) -> int:
@@ -100,6 +122,9 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--async", dest="asynchronous", action="store_true",
                    help="update on each worker's batch as it arrives (overlaps collection and learning)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--rating-curve", default=None, metavar="CURVE_YAML",
+                   help="rate every snapshot against pinned anchors while training, in a background process "
+                        "(`league-curve`), e.g. leagues/curves/curve_2v2.yaml; the curve goes to RUN_DIR/rating_curve")
     p.set_defaults(run=_run_train)
     e = sub.add_parser("eval", help="greedy evaluation of a checkpoint (or a scripted bot): success rate and mean "
                                     "return")

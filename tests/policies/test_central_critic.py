@@ -80,7 +80,9 @@ def test_central_critic_trains_resumes_and_its_checkpoint_plays(tmp_path, n_work
         assert math.isfinite(meta["metrics"][key]), (key, meta["metrics"])
     # the warm start before any update, and a snapshot, are checkpoints with the same central critic
     assert load_model(run_dir / "warm_start.pt")[1]["network"]["critic_inputs"] == 2
-    assert load_model(next((run_dir / "snapshots").glob("step_*.pt")))[1]["network"]["critic"] == "central"
+    snapshot_meta = load_model(next((run_dir / "snapshots").glob("step_*.pt")))[1]
+    assert snapshot_meta["network"]["critic"] == "central"
+    assert 0.0 < snapshot_meta["metrics"]["train_seconds"] <= meta["metrics"]["train_seconds"]
 
     # resume: one more iteration; with another critic it is a clear error naming the key
     resumed = run_dir / "resumed.pt"

@@ -87,6 +87,10 @@ def test_short_training_run_writes_a_checkpoint_that_loads_acts_and_resumes(tmp_
     assert resumed.agent_steps == 3072
     assert [h[0] for h in resumed.history] == [3072]
     assert json.loads((tmp_path / "more.json").read_text())["agent_steps"] == 3072
+    # the run's wall time counts on over the sessions of a resumed run (rating curves read it)
+    seconds = [json.loads((tmp_path / f"{name}.json").read_text())["metrics"]["train_seconds"]
+               for name in ("tiny", "more")]
+    assert 0.0 < seconds[0] < seconds[1]
     more, _ = load_model(tmp_path / "more.pt")
     assert torch.equal(more.obs_norm.count, model.obs_norm.count + 1024)
 

@@ -143,6 +143,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     # network's update)
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.learning_rate, eps=1e-5, fused=True)
     agent_steps = 0
+    seconds_before = 0.0  # the wall time of the sessions a resumed run had before this one
     curriculum = cfg.curriculum
     difficulty = curriculum.start if curriculum else None
     if resume is not None:
@@ -157,6 +158,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             optimizer.load_state_dict(torch.load(sidecar(path, ".optim.pt"), map_location=device, weights_only=True))
         agent_steps = int(meta["agent_steps"])
         difficulty = meta.get("difficulty", difficulty)
+        seconds_before = float(meta.get("metrics", {}).get("train_seconds", 0.0))
     elif cfg.init_path is not None:
         init_from_checkpoint(model, probe.obs_dim, cfg.init_path)
     opponents = None
@@ -196,6 +198,11 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     iteration, env_config = 0, wcfg.env
     bar = tqdm(total=cfg.max_steps, initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps, busy_learning, env_cpu_s = None, agent_steps, 0.0, 0.0
+    session_start = time.monotonic()
+
+    def train_seconds() -> float:
+        return seconds_before + time.monotonic() - session_start
+
     stop = StopRequest()
     try:
         while agent_steps < cfg.max_steps and not stop.requested:
@@ -241,7 +248,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             loss_history.append(losses)
             policy.version += 1
             if opponents is not None:
-                opponents.on_update(model, agent_steps, writer)
+                opponents.on_update(model, agent_steps, writer, train_seconds())
             iteration += 1
             if watch is not None and watch.due(iteration):
                 watch.publish(iteration, ModelPolicy(model, env_config))
@@ -278,8 +285,9 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
                 since_summary = []
                 next_summary += cfg.summary_freq
             if agent_steps >= next_checkpoint:
-                _periodic_checkpoint(run_dir, model, optimizer, cfg, probe.obs_dim, agent_steps, success, ret,
-                                     difficulty)
+                _periodic_checkpoint(run_dir, model, optimizer, cfg, probe.obs_dim, agent_steps,
+                                     {"train_success_rate": success, "train_mean_return": ret,
+                                      "train_seconds": train_seconds()}, difficulty)
                 next_checkpoint += cfg.checkpoint_interval
     finally:
         stop.restore()
@@ -290,7 +298,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
         if writer is not None:
             writer.close()
     success, ret = _episode_stats(recent)
-    metrics = {"train_success_rate": success, "train_mean_return": ret, **losses}
+    metrics = {"train_success_rate": success, "train_mean_return": ret, "train_seconds": train_seconds(), **losses}
     meta = checkpoint_meta(cfg, model, probe.obs_dim, agent_steps, metrics, difficulty)
     path = save_checkpoint(out, model, meta, optimizer)
     return TrainResult(path, agent_steps, history, loss_history, lags, *speed,
@@ -490,9 +498,8 @@ def _log(writer, steps: int, success: float, ret: float, episodes: list, losses:
 
 
 def _periodic_checkpoint(run_dir: Path, model: PPOModel, optimizer, cfg: TrainConfig, obs_dim: int, steps: int,
-                         success: float, ret: float, difficulty: float | None) -> None:
+                         metrics: dict[str, float], difficulty: float | None) -> None:
     folder = run_dir / "checkpoints"
-    metrics = {"train_success_rate": success, "train_mean_return": ret}
     meta = checkpoint_meta(cfg, model, obs_dim, steps, metrics, difficulty)
     save_checkpoint(folder / f"step_{steps}.pt", model, meta, optimizer)
     kept = sorted(folder.glob("step_*[0-9].pt"), key=lambda p: int(p.stem.split("_")[1]))

@@ -88,9 +88,11 @@ class OpponentPool:
         for path in self.opponent_snapshots()[-self.n_slots:]:
             self._load_into_slot(path)
 
-    def snapshot(self, model: PPOModel, agent_steps: int) -> Path:
-        """Save the learner as a playable checkpoint and put a frozen copy into the oldest slot."""
-        meta = checkpoint_meta(self.cfg, model, self.obs_dim, agent_steps, {"snapshot": True})
+    def snapshot(self, model: PPOModel, agent_steps: int, train_seconds: float | None = None) -> Path:
+        """Save the learner as a playable checkpoint and put a frozen copy into the oldest slot; ``train_seconds``
+        (the run's wall time so far, over all its sessions) goes into its metrics for rating curves."""
+        metrics = {"snapshot": True} if train_seconds is None else {"snapshot": True, "train_seconds": train_seconds}
+        meta = checkpoint_meta(self.cfg, model, self.obs_dim, agent_steps, metrics)
         path = save_checkpoint(self.snapshot_dir / f"step_{agent_steps}.pt", model, meta)
         if self.opponent_runs:  # the other learner's newest snapshots, which may have come since the last look
             self._fill_slots()
@@ -121,10 +123,10 @@ class OpponentPool:
         self.slot_generation[slot] += 1
         self.pfsp.add_opponent(name)
 
-    def on_update(self, model: PPOModel, agent_steps: int, writer) -> None:
+    def on_update(self, model: PPOModel, agent_steps: int, writer, train_seconds: float | None = None) -> None:
         """After each PPO update: snapshot the learner when due; log the pool's win rates."""
         if agent_steps >= self.next_snapshot:
-            self.snapshot(model, agent_steps)
+            self.snapshot(model, agent_steps, train_seconds)
             self.next_snapshot = (agent_steps // self.sp.snapshot_interval + 1) * self.sp.snapshot_interval
         if writer is not None:
             for name, weight in self.pfsp.weights().items():
