@@ -32,7 +32,7 @@ from .crypto import KeyExchange, ServerIdentity, action_mac, random_bytes, same_
 from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state, pack_value, seal,
                        split_action, unpack_map)
 from .settings import Limits, MatchOptions
-from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations
+from .slots import NEUTRAL, Slot, slot_observations
 
 log = logging.getLogger(__name__)
 REALTIME_TICK_HZ = 120.0
@@ -102,10 +102,10 @@ class MatchRunner:
             if not options.open and slot.seat is None:
                 slot.ticket = random_bytes()
                 self.tickets[slot.name] = slot.ticket.hex()
+        # The env plays every car from CarControls: the server parses and checks each bot's action with its slot's
+        # parser (or the match's, ``self._match_parser``) when it arrives, and builds only remote slots' observations.
         self._match_parser = self.env.action_parser
-        self._obs = SlotObservations(self.env.obs_builder, self.slots)
-        self.env.obs_builder = self._obs
-        self.env.action_parser = ControlsPassThrough(self._match_parser)
+        self._match_obs = self.env.obs_builder
         self._fill: dict[str, Any] = {}
         self.status = MatchStatus.WAITING
         self.instance = uuid.uuid4().hex  # tells this match from an earlier one of the same id
@@ -236,7 +236,7 @@ class MatchRunner:
 
     def _join_reply(self, slot: Slot) -> dict:
         rules = self.env.rules
-        obs_space = (slot.obs_builder or self._obs.default).space(rules.blue_size, rules.orange_size)
+        obs_space = (slot.obs_builder or self._match_obs).space(rules.blue_size, rules.orange_size)
         keys = {leaf: self.keys.slot(slot.user, self.id, slot.name, leaf) for leaf in ("obs", "act", "error")}
         return {
             "match": self.id, "instance": self.instance, "slot": slot.name, "user": slot.user, "lease": slot.lease,
@@ -436,10 +436,14 @@ class MatchRunner:
             if isinstance(event, Goal):
                 self._goals.append({k: v for k, v in event.as_dict().items() if k != "kind"})
 
+    def _observe(self, new_episode: bool = False) -> dict[str, np.ndarray]:
+        return slot_observations(self.slots, self._match_obs, self.env.game_state, new_episode)
+
     def _play(self) -> None:
         env = self.env
-        observations, _ = env.reset(seed=self.seed)
-        state = self._obs.state
+        env.reset(seed=self.seed)
+        observations = self._observe(new_episode=True)
+        state = env.game_state
         for name, policy in self._fill.items():
             policy.reset(state)
         rewards = dict.fromkeys(self.slots, 0.0)
@@ -452,7 +456,7 @@ class MatchRunner:
         env, deadline_s = self.env, self.options.deadline_ms / 1e3
         while env.agents and not self._stop.is_set():
             t0 = time.perf_counter()
-            state = self._obs.state
+            state = env.game_state
             self._publish(observations, rewards, state, done=False)
             actions = self._fill_controls(state)
             t_wait = time.perf_counter()
@@ -479,10 +483,11 @@ class MatchRunner:
             self._wait_s.append(time.perf_counter() - t_wait)
             for agent in env.agents:
                 actions.setdefault(agent, NEUTRAL)  # an idle fill slot
-            observations, rewards, _, _, _ = env.step(actions)
-            self._count_events(self._obs.state.events)
+            _, rewards, _, _, _ = env.play(actions, observe=False)
+            observations = self._observe()
+            self._count_events(env.game_state.events)
             self._decision_s.append(time.perf_counter() - t0)
-        self._publish(observations, rewards, self._obs.state, done=True)
+        self._publish(observations, rewards, env.game_state, done=True)
 
     def _realtime(self, observations: dict, rewards: dict) -> None:
         env, period = self.env, 1.0 / REALTIME_TICK_HZ
@@ -493,7 +498,7 @@ class MatchRunner:
         last_decision_t = next_t
         while env.agents and not self._stop.is_set():
             if tick % self.decision_ticks == 0:
-                state = self._obs.state
+                state = env.game_state
                 with self._cond:
                     if tick > 0:  # close the decision that just ended: who never answered it?
                         for slot in self.slots.values():
@@ -503,6 +508,8 @@ class MatchRunner:
                         now = time.perf_counter()
                         self._decision_s.append(now - last_decision_t)
                         last_decision_t = now
+                if tick > 0:
+                    observations = self._observe()
                 self._publish(observations, acc_rewards, state, done=False, events=events)
                 acc_rewards, events = dict.fromkeys(self.slots, 0.0), []
                 fill = self._fill_controls(state)
@@ -512,12 +519,11 @@ class MatchRunner:
             actions.update(fill)
             for agent in env.agents:
                 actions.setdefault(agent, NEUTRAL)
-            self._obs.active = (tick + 1) % self.decision_ticks == 0
-            observations, step_rewards, _, _, _ = env.step(actions)
+            _, step_rewards, _, _, _ = env.play(actions, observe=False)
             for agent, r in step_rewards.items():
                 acc_rewards[agent] += r
-            events += self._obs.state.events
-            self._count_events(self._obs.state.events)
+            events += env.game_state.events
+            self._count_events(env.game_state.events)
             tick += 1
             next_t += period
             delay = next_t - time.perf_counter()
@@ -525,8 +531,11 @@ class MatchRunner:
                 self._stop.wait(delay)
             elif delay < -0.25:  # far behind (a stall): resynchronise rather than rush through the backlog
                 next_t = time.perf_counter()
-        self._obs.active = True
-        self._publish(observations, acc_rewards, self._obs.state, done=True, events=events)
+        if tick % self.decision_ticks == 0:
+            observations = self._observe()
+        else:  # the game ended between decisions: no bot acts on that tick, so none observes it
+            observations = {}
+        self._publish(observations, acc_rewards, env.game_state, done=True, events=events)
 
     # ------------------------------------------------------------------------------------------ publishing
     def _seal(self, body: dict, raw: dict[str, bytes] | None = None) -> bytes:
@@ -583,7 +592,7 @@ class MatchRunner:
         summary = None
         if status == MatchStatus.FINISHED:
             summary = rules.summary()
-            state = self._obs.state
+            state = self.env.game_state
             slots = {n: s.public() for n, s in self.slots.items()}
             key = f"{self.keys.server}/{self.id}/{uuid.uuid4().hex[:12]}"
             result = MatchResult(
