@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import threading
 
+import numpy as np
 from ports import free_port
 
 import rocketdrl_ma
@@ -73,22 +74,23 @@ def parallel_env_face() -> list[str]:
 
 
 def vector_env_lane_face() -> list[str]:
-    """Lane 1 of two (lane ``k`` is seeded ``seed + k``); the other lane plays its own game beside it."""
+    """Lane 0 of two, the other lane playing its own game beside it in the same world. (A lane elsewhere in the
+    world's grid of arenas plays about another origin: the same game up to float rounding.)"""
     vec = VectorEnv(CONFIG, n_arenas=2, autoreset=False, **OVERRIDES)
     policies = [bots(), bots()]
-    vec.reset(seed=SEED - 1)
+    vec.reset(seed=SEED)
     for lane, players in zip(vec.lanes, policies):
         for policy in players.values():
             policy.reset(lane.game_state)
-    digests = [digest(vec.lanes[1].game_state)]
+    digests = [digest(vec.lanes[0].game_state)]
     done = False
     while not done:
         _, _, terminated, truncated, _ = vec.step(None, [controls_of(players, lane.game_state, lane.agents)
                                                          for lane, players in zip(vec.lanes, policies)])
-        digests.append(digest(vec.lanes[1].game_state))
-        done = bool(terminated[1] or truncated[1])
-        if (terminated | truncated)[0] and not done:
-            vec.reset_arenas([True, False])
+        digests.append(digest(vec.lanes[0].game_state))
+        done = bool(terminated[0] or truncated[0])
+        if (terminated | truncated)[1] and not done:
+            vec.reset_arenas(np.array([False, True]))
     vec.close()
     return digests
 
@@ -122,17 +124,18 @@ class RecordingBot(PolicyBot):
 def server_face(tmp_path, monkeypatch) -> list[str]:
     monkeypatch.setenv("ROCKETDRL_MA_KNOWN_SERVERS", str(tmp_path / "known_servers"))
     endpoint, key_dir = f"tcp/127.0.0.1:{free_port()}", tmp_path / "keys"
-    server = MatchServer(ServerSettings.from_dict({"name": "same-game", "zenoh": {"mode": "peer", "listen": [endpoint]},
-                                                   "key_dir": str(key_dir), "match_defaults": {"open": True}}),
-                         results_path=str(tmp_path / "results.sqlite"))
+    # a deadline no loaded machine misses: a missed action would be a different game
+    settings = {"name": "same-game", "zenoh": {"mode": "peer", "listen": [endpoint]}, "key_dir": str(key_dir),
+                "match_defaults": {"open": True}, "limits": {"max_deadline_ms": 60_000.0, "overrides": sorted(OVERRIDES)}}
+    server = MatchServer(ServerSettings.from_dict(settings), results_path=str(tmp_path / "results.sqlite"))
     server.start()
     client = ClientSettings.from_dict({"server": "same-game", "key_dir": str(key_dir),
                                        "zenoh": ZenohSettings(mode="client", connect=(endpoint,))})
     session = client.zenoh.open()
     try:
-        # a deadline no loaded machine misses: a missed action would be a different game
-        LobbyClient(session, client).create(CONFIG, "m", overrides=OVERRIDES, seed=SEED, mode="lockstep",
-                                            deadline_ms=30_000, ready_timeout_s=60)
+        lobby = LobbyClient(session, client)
+        lobby.create(CONFIG, "m", overrides=OVERRIDES, seed=SEED, mode="lockstep", deadline_ms=60_000,
+                     ready_timeout_s=60)
         players = {agent: RecordingBot(spec) for agent, spec in BOTS.items()}
         errors: list[BaseException] = []
 
@@ -147,6 +150,7 @@ def server_face(tmp_path, monkeypatch) -> list[str]:
         for t in threads:
             t.join(300)
         assert not errors, errors
+        assert all(slot["missed"] == 0 for slot in lobby.inspect("m")["slot_status"].values())
         assert players["blue_0"].digests == players["orange_0"].digests
         return players["blue_0"].digests
     finally:
