@@ -8,7 +8,7 @@ import numpy as np
 
 from rocketdrl_ma.config import make_rules
 from rocketdrl_ma.physics import Arena, CarControls
-from rocketdrl_ma.rules import GameState, Rules
+from rocketdrl_ma.rules import GameState, Rules, StateMutator
 from rocketdrl_ma.validation import check_int
 
 from .arenas import make_arenas
@@ -92,6 +92,19 @@ class GameEngine:
             self._rows = [np.array([car.batch_row for car in other.cars.values()], dtype=np.int64)
                           for other in self.games]
         rules.reset(self.rngs[game])
+        state = self.states[game] = rules.game_state()
+        return state
+
+    def set_state(self, game: int, mutator: StateMutator) -> GameState:
+        """Put game ``game``'s cars and ball as ``mutator`` says (``rules.FixedStateMutator`` for exact states),
+        drawing from the game's own random stream, between decisions of an episode; returns the game's state."""
+        game = self._game_index(game)
+        rules = self.games[game]
+        if rules.arena is None:
+            raise ValueError(f"set_state: game {game} was never reset; call reset_game({game}) first")
+        if not isinstance(mutator, StateMutator):
+            raise ValueError(f"mutator: expected a rules.StateMutator, got {type(mutator).__name__}")
+        mutator.apply(rules.arena, rules.cars, self.rngs[game])
         state = self.states[game] = rules.game_state()
         return state
 
