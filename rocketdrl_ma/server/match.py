@@ -8,7 +8,6 @@ Everything the match publishes is signed by the server (``protocol.seal``) and n
 """
 from __future__ import annotations
 
-import itertools
 import logging
 import threading
 import time
@@ -29,9 +28,10 @@ from rocketdrl_ma.results import MatchResult
 from rocketdrl_ma.rules.events import GameEvent, Goal
 
 from .crypto import KeyExchange, ServerIdentity, action_mac, random_bytes, same_mac
-from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state, pack_value, seal,
-                       split_action, unpack_map)
+from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state,
+                       pack_value, split_action, unpack_map)
 from .settings import Limits, MatchOptions
+from .match_wire import MatchWire
 from .slots import NEUTRAL, Slot, slot_observations
 
 log = logging.getLogger(__name__)
@@ -118,14 +118,13 @@ class MatchRunner:
         self.decision = 0  # the decision whose actions are being collected
         self.scoreboard: dict = {}
         self.rejected: Counter = Counter()
-        self._seq = itertools.count()
         self._event_counts: Counter = Counter()
         self._goals: list[dict] = []
         self._decision_s: list[float] = []
         self._wait_s: list[float] = []
         self._cond = threading.Condition()
         self._stop = threading.Event()
-        self._publishers: dict[str, Any] = {}
+        self._wire = MatchWire(session, keys, identity, match_id, self.instance)
         # One subscriber per taken slot, on that slot's own key: with access control, Zenoh tells a client
         # about a subscriber only if the key lies within what the client may use (its own prefix).
         self._act_subs: dict[str, Any] = {}
@@ -314,7 +313,7 @@ class MatchRunner:
             # to a burst of bad actions share a batch, where express ones took a batch each and overflowed that
             # priority's queue (two batches) whenever Zenoh's sender waited for the CPU.
             import zenoh
-            self.session.put(self.keys.slot(slot.user, self.id, slot.name, "error"), self._seal(
+            self.session.put(self.keys.slot(slot.user, self.id, slot.name, "error"), self._wire.seal(
                 {"kind": "error", "slot": slot.name, "decision": self.decision, "error": message}),
                 priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
 
@@ -410,19 +409,8 @@ class MatchRunner:
         for slot in self.slots.values():
             if slot.occupant == "fill" and self.options.fill != "idle":
                 self._fill[slot.name] = load_policy(self.options.fill)
-        pubs = {"state": self.keys.state(self.id), "events": self.keys.events(self.id)}
-        pubs.update({s.name: self.keys.slot(s.user, self.id, s.name, "obs") for s in self.slots.values()
-                     if s.occupant == "remote"})
-        import zenoh
-        # DROP, not BLOCK: a bot whose link is congested must never stall the match thread. The per-decision
-        # messages go express; events (a goal for a spectator's feed) are rare and each one counts, so they go
-        # above the states' priority and batched: with every message of a decision express, each taking one of the
-        # priority's two batches, a goal's events were dropped whenever Zenoh's sender waited for the CPU.
-        self._publishers = {name: self.session.declare_publisher(
-            key, express=True, congestion_control=zenoh.CongestionControl.DROP) for name, key in pubs.items()
-            if name != "events"}
-        self._publishers["events"] = self.session.declare_publisher(
-            pubs["events"], priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
+        self._wire.open({s.name: self.keys.slot(s.user, self.id, s.name, "obs") for s in self.slots.values()
+                         if s.occupant == "remote"})
 
     def _fill_controls(self, state) -> dict[str, CarControls]:
         return {name: policy.controls(name, state) for name, policy in self._fill.items()}
@@ -538,11 +526,6 @@ class MatchRunner:
         self._publish(observations, acc_rewards, env.game_state, done=True, events=events)
 
     # ------------------------------------------------------------------------------------------ publishing
-    def _seal(self, body: dict, raw: dict[str, bytes] | None = None) -> bytes:
-        """A signed message of this match: who sends it, for which match instance, its sequence number."""
-        return seal(self.identity, {**body, "server": self.keys.server, "match": self.id, "instance": self.instance,
-                                    "seq": next(self._seq)}, raw)
-
     def _slots_public(self) -> dict:
         with self._cond:
             return {n: s.public() for n, s in self.slots.items()}
@@ -555,31 +538,19 @@ class MatchRunner:
         common = {"decision": decision, "scoreboard": self.scoreboard, "done": done}
         summary = self.env.rules.summary() if done else None
         for name, slot in self.slots.items():
-            if slot.occupant != "remote" or slot.left or name not in self._publishers:
+            if slot.occupant != "remote" or slot.left or not self._wire.has(name):
                 continue
             message = {"kind": "obs", **common, "slot": name, "reward": float(rewards.get(name, 0.0)),
                        "events": events, "obs": observations.get(name, np.zeros(0, np.float32))}
             if done:
-                message.update(summary=summary, reason=MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED)
+                message.update(summary=summary,
+                               reason=MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED)
             raw = {"state": state_bytes} if slot.with_state else {}
-            self._put(name, self._seal(message, raw), final=done)
-        self._publishers["state"].put(self._seal({"kind": "state", **common, "status": self.status,
-                                                  "slots": self._slots_public()}, {"state": state_bytes}))
+            self._wire.put(name, self._wire.seal(message, raw), final=done)
+        self._wire.put("state", self._wire.seal({"kind": "state", **common, "status": self.status,
+                                                 "slots": self._slots_public()}, {"state": state_bytes}))
         if events:
-            self._publishers["events"].put(self._seal({"kind": "events", **common, "events": events}))
-
-    def _put(self, name: str, payload: bytes, final: bool = False) -> None:
-        if not final:
-            self._publishers[name].put(payload)
-            return
-        # The last message of a match must arrive (a bot waits for it): it may wait for a full queue,
-        # which per-decision messages never do. Zenoh bounds that wait and closes a link that stays stuck. At its
-        # key's priority: Zenoh keeps the order within a priority, and a message that overtook the key's last ones
-        # would make them stale to the receiver (a lower ``seq``).
-        import zenoh
-        publisher = self._publishers[name]
-        self.session.put(publisher.key_expr, payload, express=True, priority=publisher.priority,
-                         congestion_control=zenoh.CongestionControl.BLOCK)
+            self._wire.put("events", self._wire.seal({"kind": "events", **common, "events": events}))
 
     def _timing(self) -> dict:
         return {"decisions": len(self._decision_s), "decision_ms_median": _percentile_ms(self._decision_s, 50),
@@ -610,20 +581,12 @@ class MatchRunner:
         self.final_summary = summary
         with self._cond:
             self.status = status
-        if "events" in self._publishers:
-            self._put("events", self._seal({"kind": "events", "decision": self.decision, "done": True, "final": True,
-                                            "events": [], "status": status, "summary": summary, "error": self.error,
-                                            "result_key": self.result_key}), final=True)
-        self._close_zenoh()
+        if self._wire.has("events"):
+            self._wire.put("events", self._wire.seal({
+                "kind": "events", "decision": self.decision, "done": True, "final": True, "events": [],
+                "status": status, "summary": summary, "error": self.error, "result_key": self.result_key}), final=True)
+        self._wire.close(list(self._act_subs.values()))
         self.env.close()
-
-    def _close_zenoh(self) -> None:
-        for declared in [*self._act_subs.values(), *self._publishers.values()]:
-            try:
-                declared.undeclare()
-            except Exception:  # the session may already be closing
-                pass
-        self._publishers = {}
 
     def discard(self) -> None:
         """Stop a match that never ran (server shutdown before start) and free what it holds."""
