@@ -27,6 +27,7 @@ if ROOT not in sys.path:
     sys.path.insert(0, ROOT)
 
 import rocketdrl_ma  # noqa: E402
+from rocketdrl_ma.engine import float32_controls  # noqa: E402
 from rocketdrl_ma.policies.registry import load_policy  # noqa: E402
 from rocketdrl_ma.server.lobby import MatchServer  # noqa: E402
 from rocketdrl_ma.server.settings import MatchOptions, ServerSettings  # noqa: E402
@@ -52,7 +53,7 @@ def run_local(config: str, overrides: dict, seed: int) -> dict:
     while env.agents:
         t0 = time.perf_counter()
         state = env.rules.game_state()
-        env.step({a: env.action_parser.encode(policies[a].controls(a, state)) for a in env.agents})
+        env.play(float32_controls({a: policies[a].controls(a, state) for a in env.agents}))
         decision_s.append(time.perf_counter() - t0)
     env.close()
     return _stats(decision_s)

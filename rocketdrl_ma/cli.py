@@ -37,6 +37,7 @@ def play(config: str, blue: str, orange: str, video: str | None, seed: int, cloc
     returns the env's end-of-match summary. ``replay``: record every decision's state there (``.npz``)."""
     from tqdm import tqdm
 
+    from rocketdrl_ma.engine import float32_controls
     from rocketdrl_ma.policies.registry import load_policy
 
     overrides = dict(overrides or {})
@@ -59,8 +60,8 @@ def play(config: str, blue: str, orange: str, video: str | None, seed: int, cloc
         shown = 0.0
         while env.agents:
             state = env.rules.game_state()
-            actions = {agent: env.action_parser.encode(policies[agent].controls(agent, state)) for agent in env.agents}
-            _, _, _, _, infos = env.step(actions)
+            _, _, _, _, infos = env.play(float32_controls({agent: policies[agent].controls(agent, state)
+                                                           for agent in env.agents}))
             if video:
                 env.render()
             info = next(iter(infos.values()))

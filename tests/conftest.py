@@ -11,7 +11,7 @@ TESTS = Path(__file__).resolve().parent
 #: that must answer in time, a browser that must draw the live match at its rate. `make test` runs them in one
 #: process at normal priority, beside the rest at the lowest priority on two pytest-xdist workers: beside a test of
 #: the same priority they missed deadlines. (The wheel's tests serve a match too, but only wait for it to finish.)
-WALL_CLOCK_TESTS = ("server", "web", "league/test_remote.py")
+WALL_CLOCK_TESTS = ("server", "web", "league/test_remote.py", "engine/test_every_face_plays_the_same_game.py")
 
 
 def pytest_configure(config: pytest.Config) -> None:

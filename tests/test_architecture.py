@@ -17,7 +17,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "rocketdrl_ma"
 
 #: lowest first; a unit may import its own layer's units only if they are listed together
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("validation",), ("physics",), ("rules",), ("config",), ("env", "rlgym"), ("__init__",), ("policies", "results"),
+    ("validation",), ("physics",), ("rules",), ("config",), ("engine",), ("env", "rlgym"), ("__init__",),
+    ("policies", "results"),
     ("integrations",), ("server",), ("web", "league"), ("commands",), ("cli",))
 
 

@@ -1,27 +1,27 @@
-"""Many games in one process: every arena of one ``ArenaBatch`` stepped by one PyBullet step per tick.
+"""Many games in one process: a ``GameEngine`` of ``n_arenas`` games, with the learner's side of each.
 
-Each arena is a lane: a ``RocketDRLParallelEnv`` whose rules were handed that arena of the batch, so the rules,
-observations, actions, rewards and infos are the PettingZoo env's own code. Per decision the lanes parse their
-actions and start the decision, then for every tick each lane sets its controls, the batch steps once, the batch's
-events go to the lanes of their arenas, and each lane runs its per-tick logic; the lanes then build what a
-PettingZoo step returns, stacked here into arrays ``[n_arenas, n_agents, ...]``.
+Each game's learner side (a lane: ``LearnerGame``, the code a ``RocketDRLParallelEnv`` runs) parses its actions and,
+once the engine has played every game's ticks with one physics step per tick, builds what a PettingZoo step
+returns, stacked here into arrays ``[n_arenas, n_agents, ...]``.
 
 Lane ``k`` reset with ``seed`` plays exactly the game a lone env reset with ``seed + k`` plays given the same
 actions (same random draws); the physics of an arena in a batch matches a lone arena up to float rounding.
 """
 from __future__ import annotations
 
-import functools
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 
-from rocketdrl_ma.physics import Arena, ArenaBatch
+from rocketdrl_ma.config import load_config
+from rocketdrl_ma.engine import GameEngine
+from rocketdrl_ma.physics import CarControls
 
+from .learner_game import LearnerGame, check_seed
 from .observations import TeamRelativeObs
-from .parallel_env import RocketDRLParallelEnv, check_seed
 
 
 class VectorEnv:
@@ -30,9 +30,11 @@ class VectorEnv:
     ``step(actions)`` takes ``[n_arenas, n_agents, *action_shape]`` (agents in ``possible_agents`` order) and returns
     ``obs [n_arenas, n_agents, obs_dim]`` float32, ``rewards [n_arenas, n_agents]`` float32, ``terminated`` and
     ``truncated`` ``[n_arenas]`` bool, and ``infos``: a list with each arena's per-agent infos of this decision.
-    With ``autoreset`` (the default) an arena whose game ended is reset at once: its row of ``obs`` is the new
-    game's first observation, and ``final_obs`` keeps the last one of the ended game (``obs`` elsewhere). Without
-    it an ended arena waits for ``reset_arenas`` and may not be stepped until then.
+    ``step(actions, controls)`` lets the cars named in ``controls[k]`` (scripted bots) drive with those
+    ``CarControls`` directly; their rows of ``actions`` are not read. With ``autoreset`` (the default) an arena
+    whose game ended is reset at once: its row of ``obs`` is the new game's first observation, and ``final_obs``
+    keeps the last one of the ended game (``obs`` elsewhere). Without it an ended arena waits for ``reset_arenas``
+    and may not be stepped until then.
 
     ``copy.deepcopy`` and pickling give an independent copy of every arena in its state (one new PyBullet world for
     the copy's batch), as for ``RocketDRLParallelEnv``.
@@ -44,13 +46,10 @@ class VectorEnv:
             raise ValueError(f"n_arenas: must be an int >= 1, got {n_arenas!r}")
         self.n_arenas = n_arenas
         self.autoreset = autoreset
-        self.lanes = [RocketDRLParallelEnv(config, **overrides) for _ in range(n_arenas)]
-        self.batch = ArenaBatch(n_arenas, arena_shape=self.lanes[0].rules.arena_shape)
-        for k, lane in enumerate(self.lanes):
-            # A partial of a bound method, not a lambda: the env pickles (copies share nothing with the original)
-            lane.rules.arena_factory = functools.partial(self._hand_out_arena, k)
+        self.config = load_config(config, overrides)
+        self.engine = GameEngine.from_config(self.config, n_games=n_arenas)
+        self.lanes = [LearnerGame(self.config, rules) for rules in self.engine.games]
         first = self.lanes[0]
-        self.config = first.config
         self.tick_skip = first.tick_skip
         self.possible_agents: list[str] = list(first.possible_agents)
         self.n_agents = len(self.possible_agents)
@@ -65,10 +64,10 @@ class VectorEnv:
         self._live = np.zeros(n_arenas, dtype=bool)
         self.final_obs = self._obs.copy()
 
-    def _hand_out_arena(self, k: int, seed: int) -> Arena:
-        # The seed a lone env's rules would give ``Arena(seed=...)`` seeds this arena's own random stream.
-        self.batch.arena_rngs[k] = np.random.default_rng(seed)
-        return self.batch.arenas[k]
+    @property
+    def batch(self):
+        """The PyBullet world of every arena (the engine's; None before the first reset)."""
+        return self.engine.world
 
     # ------------------------------------------------------------------ episodes
     def reset(self, seed: int | None = None) -> tuple[np.ndarray, list[dict]]:
@@ -78,7 +77,7 @@ class VectorEnv:
         if seed is not None:
             # The lanes have put every car for the new episodes: a new PyBullet world with them (and none of the
             # old one's contact caches) makes a used VectorEnv replay what a new one plays from this seed.
-            self.batch.renew_bullet_world()
+            self.engine.renew_world()
         return self._obs.copy(), infos
 
     def reset_arenas(self, mask: np.ndarray, seed: int | None = None) -> tuple[np.ndarray, list[dict | None]]:
@@ -93,31 +92,39 @@ class VectorEnv:
         return self._obs.copy(), infos
 
     def _reset_lane(self, k: int, seed: int | None) -> dict:
-        obs, infos = self.lanes[k].reset(seed=seed)
+        lane = self.lanes[k]
+        if seed is not None or self.engine.rngs[k] is None:
+            lane.action_space(self.possible_agents[0]).seed(seed)
+        obs, infos = lane.start(self.engine.reset_game(k, seed))
         self._obs[k] = [obs[agent] for agent in self.possible_agents]
         self._live[k] = True
         return infos
 
-    def step(self, actions: np.ndarray):
-        actions = np.asarray(actions)
-        expected = (self.n_arenas, self.n_agents) + self.action_space.shape
-        if actions.shape != expected:
-            raise ValueError(f"actions: expected shape {expected} (arenas, agents, action), got {actions.shape}")
+    def step(self, actions: np.ndarray | None, controls: Sequence[Mapping[str, CarControls]] | None = None):
+        if controls is not None and len(controls) != self.n_arenas:
+            raise ValueError(f"controls: expected one dict per arena ({self.n_arenas}), got {len(controls)}")
+        if actions is not None:
+            actions = np.asarray(actions)
+            expected = (self.n_arenas, self.n_agents) + self.action_space.shape
+            if actions.shape != expected:
+                raise ValueError(f"actions: expected shape {expected} (arenas, agents, action), got {actions.shape}")
         if not self._live.all():
             raise ValueError(f"step: the games of arenas {np.flatnonzero(~self._live).tolist()} are over; "
                              "call reset_arenas() for them")
+        given = controls or [{}] * self.n_arenas
+        played = []
         for k, lane in enumerate(self.lanes):
-            row = actions[k]
-            controls = lane.decision_controls({agent: row[j] for j, agent in enumerate(self.possible_agents)})
-            lane.rules.begin_decision(controls)
-        self._run_ticks()
+            row = None if actions is None else {agent: actions[k, j] for j, agent in enumerate(self.possible_agents)
+                                                if agent not in given[k]}
+            played.append(lane.controls(row, given[k]))
+        states = self.engine.step(played)
         rewards = np.zeros((self.n_arenas, self.n_agents), np.float32)
         terminated = np.zeros(self.n_arenas, dtype=bool)
         truncated = np.zeros(self.n_arenas, dtype=bool)
         infos = []
         observe = self._batched_obs is None
         for k, lane in enumerate(self.lanes):
-            obs, rew, term, trunc, info = lane.end_decision(observe=observe)
+            obs, rew, term, trunc, info = lane.finish(states[k], observe=observe)
             for j, agent in enumerate(self.possible_agents):
                 if observe:
                     self._obs[k, j] = obs[agent]
@@ -147,22 +154,10 @@ class VectorEnv:
                        for lane, state in zip(self.lanes, states)]
         return batched
 
-    def _run_ticks(self) -> None:
-        batch, lanes = self.batch, self.lanes
-        for _ in range(self.tick_skip):
-            for lane in lanes:
-                lane.rules.apply_controls()
-            batch.step(1)
-            for k, lane in enumerate(lanes):
-                lane.rules.end_tick(batch.drain_events(k))
-
     # ------------------------------------------------------------------ the rest
     def state(self) -> np.ndarray:
         """``[n_arenas, state_dim]``: each arena's global state vector (``RocketDRLParallelEnv.state``)."""
         return np.stack([lane.state() for lane in self.lanes])
 
     def close(self) -> None:
-        for lane in self.lanes:
-            lane.rules.arena = None  # the batch below owns the PyBullet client
-            lane.close()
-        self.batch.close()
+        self.engine.close()

@@ -6,6 +6,7 @@ import secrets
 import threading
 import time
 
+from rocketdrl_ma.engine import float32_controls
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.policies.base import Policy
 from rocketdrl_ma.results import MatchResult
@@ -64,10 +65,8 @@ class LocalMatch:
     def step(self, controls: list[CarControls]) -> None:
         """One decision with ``controls`` of the cars ``cars()`` named, in its order."""
         env = self.env
-        actions = {agent: env.action_parser.encode(c) for agent, c in zip(env.agents, controls)}
-        # ``env.step`` without the env's own observations: every policy builds its own from the state
-        env.rules.advance(env.decision_controls(actions), env.tick_skip)
-        _, _, _, _, infos = env.end_decision(observe=False)
+        # without the env's own observations: every policy builds its own from the state
+        _, _, _, _, infos = env.play(float32_controls(dict(zip(env.agents, controls))), observe=False)
         self.summary = next(iter(infos.values())).get("summary", self.summary)
         self.events += self.env.game_state.events
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
+from rocketdrl_ma.engine import float32_controls
 from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
 from rocketdrl_ma.validation import check_choice
 
@@ -57,9 +58,9 @@ class FixedTeamEnv(ParallelEnv):
         if driven:
             raise ValueError(f"actions: {driven} are played by the fixed policies; act only for {self.possible_agents}")
         state = self.env.game_state
-        fixed = {agent: self.env.action_parser.encode(self.policies[agent].controls(agent, state))
-                 for agent in self.env.agents if agent in self.policies}
-        results = self.env.step({**actions, **fixed})
+        fixed = float32_controls({agent: self.policies[agent].controls(agent, state) for agent in self.env.agents
+                                  if agent in self.policies})
+        results = self.env.play(fixed, actions)
         self.agents = [agent for agent in self.env.agents if agent not in self.policies]
         return tuple(self._learners(per_agent) for per_agent in results)
 

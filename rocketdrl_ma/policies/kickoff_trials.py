@@ -15,6 +15,7 @@ from itertools import repeat
 
 import numpy as np
 
+from rocketdrl_ma.engine import GameEngine
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules import Match
 
@@ -55,8 +56,9 @@ def layout_seeds(team_size: int) -> list[int]:
     layouts: dict[tuple, int] = {}
     seed = 0
     m = Match(team_size=team_size, kickoff_countdown_s=COUNTDOWN_S)
+    engine = GameEngine([m])
     while len(layouts) < math.perm(len(C.KICKOFF_SPOTS_BLUE), team_size):
-        m.reset(np.random.default_rng(seed))
+        engine.reset_game(0, seed)
         spots = tuple(tuple(m.game_state().cars[f"blue_{i}"].pos[:2].round()) for i in range(team_size))
         layouts.setdefault(spots, seed)
         seed += 1
@@ -81,11 +83,12 @@ def play_kickoff(tuning: RotatorTuning, team_size: int, kickoff: Kickoff, horizo
     of the countdown's end, the flip-chasers did)."""
     rotator, chaser = Rotator(tuning), FlipChaser()
     m = Match(team_size=team_size, kickoff_countdown_s=COUNTDOWN_S + kickoff.phase_ticks / C.TICK_RATE_HZ)
-    m.reset(np.random.default_rng(kickoff.seed))
+    engine = GameEngine([m])
+    engine.reset_game(0, kickoff.seed)
     for _ in range(int((COUNTDOWN_S + horizon_s) * C.TICK_RATE_HZ / DECISION_TICKS) + 1):
         state = m.game_state()
-        m.advance({a: (rotator if a.startswith(kickoff.rotator_team) else chaser).controls(a, state) for a in m.cars},
-                  DECISION_TICKS)
+        engine.step([{a: (rotator if a.startswith(kickoff.rotator_team) else chaser).controls(a, state)
+                      for a in m.cars}], DECISION_TICKS)
         blue, orange = m.game_state().score
         if blue or orange:
             rotators_scored = (blue > 0) == (kickoff.rotator_team == "blue")

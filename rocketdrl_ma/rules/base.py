@@ -8,8 +8,6 @@ and every minigame are subclasses; a new mode needs nothing else.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Callable
-
 import numpy as np
 
 from rocketdrl_ma.physics import Arena, Car, CarControls, DemoMode, MutatorConfig, PhysicsEvent, PhysicsEventKind
@@ -22,7 +20,6 @@ from .rewards import CombinedReward, TermMakers, share_within_teams
 from .state import GameState, Obstacle, agent_names, agent_team
 
 NEUTRAL = CarControls()
-_NEUTRAL_ROW = NEUTRAL.as_array()
 GOAL_LINE_Y = C.ARENA_EXTENT_Y
 
 
@@ -40,7 +37,8 @@ def ball_heading_into_goal(pos: np.ndarray, vel: np.ndarray, goal_sign: float) -
 
 
 class Rules(ABC):
-    """Owns one arena, its cars (one per agent) and the logic of a game mode."""
+    """The logic of a game mode over one arena and its cars (one per agent); a ``GameEngine`` gives the arena and
+    runs the ticks."""
 
     #: the reward terms a mode offers (name -> maker); the config's ``rewards:`` may weight any of them
     REWARD_TERMS: TermMakers = {}
@@ -75,14 +73,6 @@ class Rules(ABC):
         self._touching: set[str] = set()  # agents in contact with the ball on the last tick
         self.last_controls: dict[str, CarControls] = {}
         self._agent_by_car_id: dict[int, str] = {}
-        # This decision's control rows of every car and where they go in the batch (see begin_decision)
-        self._control_index = np.zeros(0, dtype=np.int64)
-        self._control_matrix = np.zeros((0, len(_NEUTRAL_ROW)))
-        self._neutral_matrix = self._control_matrix
-        self._applied_frozen: bool | None = None  # what apply_controls last wrote this decision (None: nothing)
-        # Makes the arena on the first reset from a seed the episode's rng draws; None: a lone Arena(seed) of the
-        # rules' arena_shape. A vectorised env sets it to hand out the arenas of one ArenaBatch (of that shape).
-        self.arena_factory: Callable[[int], Arena] | None = None
 
     # ------------------------------------------------------------------ what a game mode defines
     def spawn_mutators(self) -> list[StateMutator]:
@@ -114,30 +104,32 @@ class Rules(ABC):
         """How the episode went, for ``infos`` at the end (score, success, durations)."""
         return self.scoreboard()
 
-    # ------------------------------------------------------------------ machinery the env drives
-    def build(self, seed: int | None = None) -> None:
-        self.arena = (Arena(seed=seed, arena_shape=self.arena_shape) if self.arena_factory is None
-                      else self.arena_factory(seed))
-        self.arena.set_mutator_config(MutatorConfig(demo_mode=DemoMode.NORMAL if self.demos else DemoMode.DISABLED,
-                                                    boost_pads=self.boost_pads))
+    # ------------------------------------------------------------------ machinery the engine drives
+    def build(self, arena: Arena) -> None:
+        """Play on ``arena`` (a game of the engine's batch): this mode's switches and one car per agent."""
+        if self.arena is not None:
+            raise ValueError("arena: these rules already play on an arena; make new rules for another")
+        self.arena = arena
+        arena.set_mutator_config(MutatorConfig(demo_mode=DemoMode.NORMAL if self.demos else DemoMode.DISABLED,
+                                               boost_pads=self.boost_pads))
         for agent in self.possible_agents:
-            car = self.arena.add_car(team=agent_team(agent), preset=self.car_preset)
+            car = arena.add_car(team=agent_team(agent), preset=self.car_preset)
             self.cars[agent] = car
             self._agent_by_car_id[car.id] = agent
 
     def reset(self, rng: np.random.Generator) -> None:
-        # Drawn on every reset, not only the first, so that reset(seed=s) of a used env replays a fresh env's game.
-        arena_seed = int(rng.integers(1 << 31))
+        """A new episode on the arena ``build`` gave, every draw from ``rng`` (the engine's stream of this game)."""
         if self.arena is None:
-            self.build(seed=arena_seed)
-        else:
-            # A car demoed when the last episode ended comes back before the reseed: its respawn spot (the kickoff
-            # moves it anyway) is a draw that a fresh arena's stream has not made, and would shift every later
-            # respawn of the episode.
-            for car in self.cars.values():
-                if car.get_state().is_demoed:
-                    car.respawn()
-            self.arena.reseed(arena_seed)
+            raise ValueError("reset: these rules have no arena yet; a GameEngine builds them on one")
+        # Drawn on every reset, not only the first, so that reset(seed=s) of a used game replays a fresh game.
+        arena_seed = int(rng.integers(1 << 31))
+        # A car demoed when the last episode ended comes back before the reseed: its respawn spot (the kickoff
+        # moves it anyway) is a draw that a fresh arena's stream has not made, and would shift every later
+        # respawn of the episode.
+        for car in self.cars.values():
+            if car.get_state().is_demoed:
+                car.respawn()
+        self.arena.reseed(arena_seed)
         for car in self.cars.values():
             car.set_controls(NEUTRAL)
         for mutator in self.spawn_mutators():
@@ -150,36 +142,10 @@ class Rules(ABC):
         self.on_reset(rng)
         self.rewards.reset(list(self.cars), self.game_state())
 
-    def advance(self, controls: dict[str, CarControls], ticks: int) -> None:
-        """Apply ``controls`` for ``ticks`` physics ticks, running the game logic after each.
-
-        A vectorised env runs the same three steps itself around one ``ArenaBatch.step`` for all arenas."""
-        self.begin_decision(controls)
-        for _ in range(ticks):
-            self.apply_controls()
-            self.arena.step(1)
-            self.end_tick(self.arena.drain_events())
-
     def begin_decision(self, controls: dict[str, CarControls]) -> None:
-        """Before a decision's ticks; a subclass clears its per-decision records here."""
+        """Before a decision's ticks (the engine has the controls); a subclass clears its per-decision records."""
         self.events = []
         self.last_controls.update(controls)
-        # The rows of validated CarControls, written straight into the batch each tick by one array assignment
-        # (Car.set_controls per car and tick rebuilt and re-checked them 8 times per decision).
-        self._control_index = np.array([car.batch_row for car in self.cars.values()], dtype=np.int64)
-        self._control_matrix = np.array([self.last_controls[agent].as_array() for agent in self.cars]).reshape(
-            len(self.cars), len(_NEUTRAL_ROW))
-        if len(self._neutral_matrix) != len(self.cars):
-            self._neutral_matrix = np.tile(_NEUTRAL_ROW, (len(self.cars), 1))
-        self._applied_frozen = None
-
-    def apply_controls(self) -> None:
-        """Before each tick: the decision's controls, or neutral ones while the cars are frozen."""
-        frozen = self.controls_frozen()
-        # Nothing else writes these rows during a decision, so they need writing only when they change.
-        if frozen != self._applied_frozen:
-            self.arena.batch.controls[self._control_index] = self._neutral_matrix if frozen else self._control_matrix
-            self._applied_frozen = frozen
 
     def end_tick(self, physics_events: list[PhysicsEvent]) -> None:
         """After each tick: this arena's physics events (``Arena.drain_events()``) become game events, then the
@@ -233,6 +199,5 @@ class Rules(ABC):
         return share_within_teams(rewards, self.team_spirit)
 
     def close(self) -> None:
-        if self.arena is not None:
-            self.arena.close()
-            self.arena = None
+        """Forget the arena (its engine closes the world it belongs to)."""
+        self.arena = None

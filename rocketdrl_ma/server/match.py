@@ -8,7 +8,6 @@ Everything the match publishes is signed by the server (``protocol.seal``) and n
 """
 from __future__ import annotations
 
-import itertools
 import logging
 import threading
 import time
@@ -29,10 +28,11 @@ from rocketdrl_ma.results import MatchResult
 from rocketdrl_ma.rules.events import GameEvent, Goal
 
 from .crypto import KeyExchange, ServerIdentity, action_mac, random_bytes, same_mac
-from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state, pack_value, seal,
-                       split_action, unpack_map)
+from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state,
+                       pack_value, split_action, unpack_map)
 from .settings import Limits, MatchOptions
-from .slots import NEUTRAL, ControlsPassThrough, Slot, SlotObservations
+from .match_wire import MatchWire
+from .slots import NEUTRAL, Slot, slot_observations
 
 log = logging.getLogger(__name__)
 REALTIME_TICK_HZ = 120.0
@@ -105,10 +105,10 @@ class MatchRunner:
             if not options.open and slot.seat is None:
                 slot.ticket = random_bytes()
                 self.tickets[slot.name] = slot.ticket.hex()
+        # The env plays every car from CarControls: the server parses and checks each bot's action with its slot's
+        # parser (or the match's, ``self._match_parser``) when it arrives, and builds only remote slots' observations.
         self._match_parser = self.env.action_parser
-        self._obs = SlotObservations(self.env.obs_builder, self.slots)
-        self.env.obs_builder = self._obs
-        self.env.action_parser = ControlsPassThrough(self._match_parser)
+        self._match_obs = self.env.obs_builder
         self._fill: dict[str, Any] = {}
         self.status = MatchStatus.WAITING
         self.instance = uuid.uuid4().hex  # tells this match from an earlier one of the same id
@@ -121,14 +121,13 @@ class MatchRunner:
         self.decision = 0  # the decision whose actions are being collected
         self.scoreboard: dict = {}
         self.rejected: Counter = Counter()
-        self._seq = itertools.count()
         self._event_counts: Counter = Counter()
         self._goals: list[dict] = []
         self._decision_s: list[float] = []
         self._wait_s: list[float] = []
         self._cond = threading.Condition()
         self._stop = threading.Event()
-        self._publishers: dict[str, Any] = {}
+        self._wire = MatchWire(session, keys, identity, match_id, self.instance)
         # One subscriber per taken slot, on that slot's own key: with access control, Zenoh tells a client
         # about a subscriber only if the key lies within what the client may use (its own prefix).
         self._act_subs: dict[str, Any] = {}
@@ -239,7 +238,7 @@ class MatchRunner:
 
     def _join_reply(self, slot: Slot) -> dict:
         rules = self.env.rules
-        obs_space = (slot.obs_builder or self._obs.default).space(rules.blue_size, rules.orange_size)
+        obs_space = (slot.obs_builder or self._match_obs).space(rules.blue_size, rules.orange_size)
         keys = {leaf: self.keys.slot(slot.user, self.id, slot.name, leaf) for leaf in ("obs", "act", "error")}
         return {
             "match": self.id, "instance": self.instance, "slot": slot.name, "user": slot.user, "lease": slot.lease,
@@ -317,7 +316,7 @@ class MatchRunner:
             # to a burst of bad actions share a batch, where express ones took a batch each and overflowed that
             # priority's queue (two batches) whenever Zenoh's sender waited for the CPU.
             import zenoh
-            self.session.put(self.keys.slot(slot.user, self.id, slot.name, "error"), self._seal(
+            self.session.put(self.keys.slot(slot.user, self.id, slot.name, "error"), self._wire.seal(
                 {"kind": "error", "slot": slot.name, "decision": self.decision, "error": message}),
                 priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
 
@@ -413,19 +412,8 @@ class MatchRunner:
         for slot in self.slots.values():
             if slot.occupant == "fill" and self.options.fill != "idle":
                 self._fill[slot.name] = load_policy(self.options.fill)
-        pubs = {"state": self.keys.state(self.id), "events": self.keys.events(self.id)}
-        pubs.update({s.name: self.keys.slot(s.user, self.id, s.name, "obs") for s in self.slots.values()
-                     if s.occupant == "remote"})
-        import zenoh
-        # DROP, not BLOCK: a bot whose link is congested must never stall the match thread. The per-decision
-        # messages go express; events (a goal for a spectator's feed) are rare and each one counts, so they go
-        # above the states' priority and batched: with every message of a decision express, each taking one of the
-        # priority's two batches, a goal's events were dropped whenever Zenoh's sender waited for the CPU.
-        self._publishers = {name: self.session.declare_publisher(
-            key, express=True, congestion_control=zenoh.CongestionControl.DROP) for name, key in pubs.items()
-            if name != "events"}
-        self._publishers["events"] = self.session.declare_publisher(
-            pubs["events"], priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
+        self._wire.open({s.name: self.keys.slot(s.user, self.id, s.name, "obs") for s in self.slots.values()
+                         if s.occupant == "remote"})
 
     def _fill_controls(self, state) -> dict[str, CarControls]:
         return {name: policy.controls(name, state) for name, policy in self._fill.items()}
@@ -439,10 +427,14 @@ class MatchRunner:
             if isinstance(event, Goal):
                 self._goals.append({k: v for k, v in event.as_dict().items() if k != "kind"})
 
+    def _observe(self, new_episode: bool = False) -> dict[str, np.ndarray]:
+        return slot_observations(self.slots, self._match_obs, self.env.game_state, new_episode)
+
     def _play(self) -> None:
         env = self.env
-        observations, _ = env.reset(seed=self.seed)
-        state = self._obs.state
+        env.reset(seed=self.seed)
+        observations = self._observe(new_episode=True)
+        state = env.game_state
         for name, policy in self._fill.items():
             policy.reset(state)
         rewards = dict.fromkeys(self.slots, 0.0)
@@ -455,7 +447,7 @@ class MatchRunner:
         env, deadline_s = self.env, self.options.deadline_ms / 1e3
         while env.agents and not self._stop.is_set():
             t0 = time.perf_counter()
-            state = self._obs.state
+            state = env.game_state
             self._publish(observations, rewards, state, done=False)
             actions = self._fill_controls(state)
             t_wait = time.perf_counter()
@@ -482,10 +474,11 @@ class MatchRunner:
             self._wait_s.append(time.perf_counter() - t_wait)
             for agent in env.agents:
                 actions.setdefault(agent, NEUTRAL)  # an idle fill slot
-            observations, rewards, _, _, _ = env.step(actions)
-            self._count_events(self._obs.state.events)
+            _, rewards, _, _, _ = env.play(actions, observe=False)
+            observations = self._observe()
+            self._count_events(env.game_state.events)
             self._decision_s.append(time.perf_counter() - t0)
-        self._publish(observations, rewards, self._obs.state, done=True)
+        self._publish(observations, rewards, env.game_state, done=True)
 
     def _realtime(self, observations: dict, rewards: dict) -> None:
         env, period = self.env, 1.0 / REALTIME_TICK_HZ
@@ -496,7 +489,7 @@ class MatchRunner:
         last_decision_t = next_t
         while env.agents and not self._stop.is_set():
             if tick % self.decision_ticks == 0:
-                state = self._obs.state
+                state = env.game_state
                 with self._cond:
                     if tick > 0:  # close the decision that just ended: who never answered it?
                         for slot in self.slots.values():
@@ -506,11 +499,13 @@ class MatchRunner:
                         now = time.perf_counter()
                         self._decision_s.append(now - last_decision_t)
                         last_decision_t = now
+                if tick > 0:
+                    observations = self._observe()
                 self._publish(observations, acc_rewards, state, done=False, events=events)
                 acc_rewards, events = dict.fromkeys(self.slots, 0.0), []
                 fill = self._fill_controls(state)
             elif tick % REALTIME_STATE_TICKS == 0:
-                self._publish_state(self._obs.state, {"decision": self.decision, "done": False,
+                self._publish_state(env.game_state, {"decision": self.decision, "done": False,
                                                       "scoreboard": self.env.rules.scoreboard()})
             with self._cond:
                 actions = {s.name: s.last_controls if s.waits_for or self.options.replacement == "repeat"
@@ -518,12 +513,11 @@ class MatchRunner:
             actions.update(fill)
             for agent in env.agents:
                 actions.setdefault(agent, NEUTRAL)
-            self._obs.active = (tick + 1) % self.decision_ticks == 0
-            observations, step_rewards, _, _, _ = env.step(actions)
+            _, step_rewards, _, _, _ = env.play(actions, observe=False)
             for agent, r in step_rewards.items():
                 acc_rewards[agent] += r
-            events += self._obs.state.events
-            self._count_events(self._obs.state.events)
+            events += env.game_state.events
+            self._count_events(env.game_state.events)
             tick += 1
             next_t += period
             delay = next_t - time.perf_counter()
@@ -531,15 +525,13 @@ class MatchRunner:
                 self._stop.wait(delay)
             elif delay < -0.25:  # far behind (a stall): resynchronise rather than rush through the backlog
                 next_t = time.perf_counter()
-        self._obs.active = True
-        self._publish(observations, acc_rewards, self._obs.state, done=True, events=events)
+        if tick % self.decision_ticks == 0:
+            observations = self._observe()
+        else:  # the game ended between decisions: no bot acts on that tick, so none observes it
+            observations = {}
+        self._publish(observations, acc_rewards, env.game_state, done=True, events=events)
 
     # ------------------------------------------------------------------------------------------ publishing
-    def _seal(self, body: dict, raw: dict[str, bytes] | None = None) -> bytes:
-        """A signed message of this match: who sends it, for which match instance, its sequence number."""
-        return seal(self.identity, {**body, "server": self.keys.server, "match": self.id, "instance": self.instance,
-                                    "seq": next(self._seq)}, raw)
-
     def _slots_public(self) -> dict:
         with self._cond:
             return {n: s.public() for n, s in self.slots.items()}
@@ -552,35 +544,23 @@ class MatchRunner:
         common = {"decision": decision, "scoreboard": self.scoreboard, "done": done}
         summary = self.env.rules.summary() if done else None
         for name, slot in self.slots.items():
-            if slot.occupant != "remote" or slot.left or name not in self._publishers:
+            if slot.occupant != "remote" or slot.left or not self._wire.has(name):
                 continue
             message = {"kind": "obs", **common, "slot": name, "reward": float(rewards.get(name, 0.0)),
                        "events": events, "obs": observations.get(name, np.zeros(0, np.float32))}
             if done:
-                message.update(summary=summary, reason=MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED)
+                message.update(summary=summary,
+                               reason=MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED)
             raw = {"state": state_bytes} if slot.with_state else {}
-            self._put(name, self._seal(message, raw), final=done)
+            self._wire.put(name, self._wire.seal(message, raw), final=done)
         self._publish_state(state, common, state_bytes)
         if events:
-            self._publishers["events"].put(self._seal({"kind": "events", **common, "events": events}))
+            self._wire.put("events", self._wire.seal({"kind": "events", **common, "events": events}))
 
     def _publish_state(self, state, common: dict, state_bytes: bytes | None = None) -> None:
-        self._publishers["state"].put(self._seal({"kind": "state", **common, "status": self.status,
-                                                  "slots": self._slots_public()},
-                                                 {"state": state_bytes or pack_value(encode_state(state))}))
-
-    def _put(self, name: str, payload: bytes, final: bool = False) -> None:
-        if not final:
-            self._publishers[name].put(payload)
-            return
-        # The last message of a match must arrive (a bot waits for it): it may wait for a full queue,
-        # which per-decision messages never do. Zenoh bounds that wait and closes a link that stays stuck. At its
-        # key's priority: Zenoh keeps the order within a priority, and a message that overtook the key's last ones
-        # would make them stale to the receiver (a lower ``seq``).
-        import zenoh
-        publisher = self._publishers[name]
-        self.session.put(publisher.key_expr, payload, express=True, priority=publisher.priority,
-                         congestion_control=zenoh.CongestionControl.BLOCK)
+        self._wire.put("state", self._wire.seal({"kind": "state", **common, "status": self.status,
+                                                 "slots": self._slots_public()},
+                                                {"state": state_bytes or pack_value(encode_state(state))}))
 
     def _timing(self) -> dict:
         return {"decisions": len(self._decision_s), "decision_ms_median": _percentile_ms(self._decision_s, 50),
@@ -593,7 +573,7 @@ class MatchRunner:
         summary = None
         if status == MatchStatus.FINISHED:
             summary = rules.summary()
-            state = self._obs.state
+            state = self.env.game_state
             slots = {n: s.public() for n, s in self.slots.items()}
             key = f"{self.keys.server}/{self.id}/{uuid.uuid4().hex[:12]}"
             result = MatchResult(
@@ -611,20 +591,12 @@ class MatchRunner:
         self.final_summary = summary
         with self._cond:
             self.status = status
-        if "events" in self._publishers:
-            self._put("events", self._seal({"kind": "events", "decision": self.decision, "done": True, "final": True,
-                                            "events": [], "status": status, "summary": summary, "error": self.error,
-                                            "result_key": self.result_key}), final=True)
-        self._close_zenoh()
+        if self._wire.has("events"):
+            self._wire.put("events", self._wire.seal({
+                "kind": "events", "decision": self.decision, "done": True, "final": True, "events": [],
+                "status": status, "summary": summary, "error": self.error, "result_key": self.result_key}), final=True)
+        self._wire.close(list(self._act_subs.values()))
         self.env.close()
-
-    def _close_zenoh(self) -> None:
-        for declared in [*self._act_subs.values(), *self._publishers.values()]:
-            try:
-                declared.undeclare()
-            except Exception:  # the session may already be closing
-                pass
-        self._publishers = {}
 
     def discard(self) -> None:
         """Stop a match that never ran (server shutdown before start) and free what it holds."""

@@ -1,5 +1,5 @@
-"""One match's seats: who plays each agent slot, its secret, its counters; and the per-slot
-observation builder and action parser the server plugs into the env.
+"""One match's seats: who plays each agent slot, its secret, its counters, the observation builder and action
+parser its bot asked for; and each remote slot's observations of the game.
 
 A slot is ``open`` (nobody yet), ``remote`` (a bot joined and holds its secret; it may be connected or
 not, per its Zenoh liveliness token and its recent actions) or ``fill`` (the server plays it: a scripted
@@ -18,7 +18,6 @@ from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.rules.state import GameState
 
 NEUTRAL = CarControls()
-_NO_OBS = np.zeros(0, dtype=np.float32)
 
 
 @dataclass
@@ -88,48 +87,17 @@ class Slot:
                 "ticket": self.ticket is not None, **self.counts}
 
 
-class SlotObservations(ObsBuilder):
-    """The env's observation builder during a server match: each remote slot gets its own builder's output
-    (the match's, or the one its bot asked for); slots the server plays get an empty array, since nobody
-    reads it. It also keeps the state the env built the last observations from (``state``)."""
-
-    def __init__(self, default: ObsBuilder, slots: dict[str, Slot]):
-        self.default, self.slots = default, slots
-        self.active = True  # realtime mode builds observations only on decision ticks
-        self.state: GameState | None = None
-
-    def space(self, blue_size: int, orange_size: int):
-        return self.default.space(blue_size, orange_size)
-
-    def reset(self, state: GameState) -> None:
-        self.state = state
-        self.default.reset(state)
-        for slot in self.slots.values():
-            if slot.obs_builder is not None:
-                slot.obs_builder.reset(state)
-
-    def build(self, agent: str, state: GameState) -> np.ndarray:
-        self.state = state
-        slot = self.slots[agent]
-        if not self.active or slot.occupant != "remote":
-            return _NO_OBS
-        return (slot.obs_builder or self.default).build(agent, state)
-
-
-class ControlsPassThrough(ActionParser):
-    """The env's action parser during a server match: the server parses and checks every bot's action
-    with that slot's parser when it arrives, so the env receives ``CarControls`` only."""
-
-    def __init__(self, space_of: ActionParser):
-        self._space = space_of.space()
-
-    def space(self):
-        return self._space
-
-    def parse(self, agent: str, action, state: GameState | None = None) -> CarControls:
-        if not isinstance(action, CarControls):
-            raise ValueError(f"action for {agent}: the server passes CarControls, got {type(action).__name__}")
-        return action
-
-    def encode(self, controls: CarControls) -> CarControls:
-        return controls
+def slot_observations(slots: dict[str, Slot], default: ObsBuilder, state: GameState,
+                      new_episode: bool = False) -> dict[str, np.ndarray]:
+    """Each remote slot's observation of ``state``, from the builder its bot asked for or the match's ``default``;
+    the slots the server plays get none (nobody would read it). ``new_episode``: ``state`` begins an episode, so
+    the bots' own builders reset first (the match's env resets ``default``)."""
+    observations = {}
+    for name, slot in slots.items():
+        if slot.occupant != "remote":
+            continue
+        builder = slot.obs_builder or default
+        if new_episode and slot.obs_builder is not None:
+            builder.reset(state)
+        observations[name] = builder.build(name, state)
+    return observations

@@ -125,11 +125,9 @@ class TrainingBroadcast:
 
     def _play(self, iteration: int, policy: Policy) -> None:
         import rocketdrl_ma
-        from rocketdrl_ma.server.slots import ControlsPassThrough
 
         env = rocketdrl_ma.parallel_env(self.env_config, **self.env_overrides)
         try:
-            env.action_parser = ControlsPassThrough(env.action_parser)  # the policy gives CarControls
             env.reset(seed=self.seed + iteration)
             if self.replay_dir is not None:
                 self.replay_dir.mkdir(parents=True, exist_ok=True)
@@ -143,7 +141,8 @@ class TrainingBroadcast:
             while env.agents and not self._stop.is_set():
                 self._send(env, decision, info, slots, done=False)
                 state = env.game_state
-                env.step({agent: policy.controls(agent, state) for agent in env.agents})
+                # the policy gives CarControls, which drive the cars as they are; it observes for itself
+                env.play({agent: policy.controls(agent, state) for agent in env.agents}, observe=False)
                 decision += 1
                 self._stop.wait(max(0.0, start + decision * period_s - time.monotonic()))
             self._send(env, decision, info, slots, done=True)

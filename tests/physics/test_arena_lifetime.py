@@ -13,6 +13,7 @@ import numpy as np
 import pybullet as pb
 
 from rocketdrl_ma.physics import Arena, ArenaBatch
+from rocketdrl_ma.engine import GameEngine
 from rocketdrl_ma.rules import Match
 
 
@@ -46,8 +47,9 @@ def test_a_dropped_arena_disconnects_its_world_at_once():
 def test_a_dropped_match_disconnects_its_world_at_once():
     def make():
         match = Match(team_size=3, kickoff_countdown_s=0.0)
-        match.reset(np.random.default_rng(0))
-        match.advance({}, 8)
+        engine = GameEngine([match])
+        engine.reset_game(0, 0)
+        engine.step([{}], 8)
         return match.arena
 
     assert _freed_when_dropped(make)

@@ -13,6 +13,7 @@ from rocketdrl_ma.policies import kickoff_trials, rotation
 from rocketdrl_ma.policies.rotation import KickoffLane, Role, TeamView
 from rocketdrl_ma.policies.rotator_tuning import KickoffTable, RotatorTuning, shipped_tuning
 from rocketdrl_ma.policies.scripted import make_scripted
+from rocketdrl_ma.engine import GameEngine
 from rocketdrl_ma.rules import Match
 from processes import two_processes
 
@@ -94,7 +95,8 @@ def test_the_3v3_last_man_waits_at_the_halfway_line_while_his_team_attacks():
     furthest_y = {}
     for size in (2, 3):
         m = Match(team_size=size, kickoff_countdown_s=0.0)
-        m.reset(np.random.default_rng(0))
+        engine = GameEngine([m])
+        engine.reset_game(0, 0)
         spots = {"blue_0": (0.0, 2500.0), "blue_1": (-1000.0, -2500.0), "blue_2": (2500.0, 1500.0)}
         for agent in (a for a in m.cars if a.startswith("blue")):
             m.cars[agent].set_state(CarState(pos=np.array([*spots[agent], 17.0]), rot_mat=yaw_rot_mat(np.pi / 2),
@@ -110,7 +112,7 @@ def test_the_3v3_last_man_waits_at_the_halfway_line_while_his_team_attacks():
             state = m.game_state()
             if state.ball.pos[1] < 0.0:  # the ball back in the own half: the line no longer holds him
                 break
-            m.advance({a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}, 8)
+            engine.step([{a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}], 8)
             furthest_y[size] = max(furthest_y[size], float(m.game_state().cars["blue_1"].pos[1]))
     assert furthest_y[3] < 300.0 and furthest_y[2] > 1000.0, furthest_y
 
@@ -173,7 +175,8 @@ def test_the_presser_plays_as_a_rotator_alone_on_its_team():
     """Every decision of a 40 s 3v3 match outside kickoffs: the presser's controls are those of a rotator with no
     team-mates (the flip-chaser's game with the shot dodge), while the last man's often are not (he covers)."""
     m = Match(team_size=3, clock_s=40.0, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(7))
+    engine = GameEngine([m])
+    engine.reset_game(0, 7)
     rotator, chaser = make_scripted("rotator"), make_scripted("flip_chaser")
     presser_decisions, last_man_apart = 0, 0
     while not (m.is_terminated() or m.is_truncated()):
@@ -189,7 +192,7 @@ def test_the_presser_plays_as_a_rotator_alone_on_its_team():
                     assert same, (state.tick, agent)
                     presser_decisions += 1
                 last_man_apart += role is Role.LAST and not same
-        m.advance({a: (rotator if a.startswith("blue") else chaser).controls(a, state) for a in m.cars}, 8)
+        engine.step([{a: (rotator if a.startswith("blue") else chaser).controls(a, state) for a in m.cars}], 8)
     assert presser_decisions > 400 and last_man_apart > 150, (presser_decisions, last_man_apart)
 
 
@@ -223,7 +226,8 @@ def _shot(bot: str, car_x: float, speed_uu_s: float, ball_xy: tuple[float, float
     """A car driving up the field at a resting ball, the opponent far away: whether it dodged, who touched the
     ball first, and the ball's speed just after."""
     m = Match(team_size=1, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(0))
+    engine = GameEngine([m])
+    engine.reset_game(0, 0)
     m.cars["orange_0"].set_state(CarState(pos=np.array([3000.0, 4000.0, 17.0]), on_ground=True))
     m.cars["blue_0"].set_state(CarState(pos=np.array([car_x, -2000.0, 17.0]), vel=np.array([0.0, speed_uu_s, 0.0]),
                                         rot_mat=yaw_rot_mat(np.pi / 2), on_ground=True, boost=50.0))
@@ -235,9 +239,9 @@ def _shot(bot: str, car_x: float, speed_uu_s: float, ball_xy: tuple[float, float
         dodged |= state.cars["blue_0"].has_flipped
         if state.last_touch is not None:
             break
-        m.advance({"blue_0": policy.controls("blue_0", state), "orange_0": idle.controls("orange_0", state)}, 8)
+        engine.step([{"blue_0": policy.controls("blue_0", state), "orange_0": idle.controls("orange_0", state)}], 8)
     for _ in range(3):  # the contact's ticks
-        m.advance({"blue_0": CarControls(), "orange_0": CarControls()}, 8)
+        engine.step([{"blue_0": CarControls(), "orange_0": CarControls()}], 8)
     state = m.game_state()
     return dodged, state.last_touch, float(np.linalg.norm(state.ball.vel))
 
@@ -264,7 +268,8 @@ def test_the_last_man_lying_on_its_side_against_a_net_wall_jumps_off_it(size, ne
     free, so every role jumps off such a wall: within 3 s the car is back on its wheels and on its way to its own
     half (the match it was found in: docs/experiments/rotator-tuning.md)."""
     m = Match(team_size=size, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(0))
+    engine = GameEngine([m])
+    engine.reset_game(0, 0)
     wall_up = np.array([-math.copysign(1.0, net_wall_x), 0.0, 0.0])
     nose_up = np.array([0.0, 0.0, 1.0])
     on_its_side = np.column_stack((nose_up, np.cross(wall_up, nose_up), wall_up))  # forward, right, up
@@ -275,7 +280,7 @@ def test_the_last_man_lying_on_its_side_against_a_net_wall_jumps_off_it(size, ne
     assert rotation.assign_roles(rotation.team_view("blue_0", state), None, TUNING)["blue_0"] is Role.LAST
     for _ in range(45):
         state = m.game_state()
-        m.advance({a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}, 8)
+        engine.step([{a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}], 8)
     car = m.game_state().cars["blue_0"]
     assert car.rot_mat[2, 2] > 0.9 and car.on_ground and car.pos[1] < 4400.0, (car.pos, car.rot_mat[:, 2])
 
@@ -285,7 +290,8 @@ def test_rotator_controls_are_rows_of_the_lookup_table(size):
     """Every decision of a team of rotators against flip-chasers (kickoff and shot dodges included) survives
     encode and parse unchanged, so the team plays the same through the lookup table and a clone can copy it."""
     m = Match(team_size=size, clock_s=40.0, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(size))
+    engine = GameEngine([m])
+    engine.reset_game(0, size)
     rotator, chaser, table = make_scripted("rotator"), make_scripted("flip_chaser"), LookupTableActions()
     open_play_jumps = 0
     while not (m.is_terminated() or m.is_truncated()):
@@ -296,7 +302,7 @@ def test_rotator_controls_are_rows_of_the_lookup_table(size):
             if agent.startswith("blue"):
                 assert table.parse(agent, table.encode(controls[agent])) == controls[agent]
                 open_play_jumps += controls[agent].jump and not kickoff
-        m.advance(controls, 8)
+        engine.step([controls], 8)
     assert open_play_jumps >= 2  # shot dodges happened
 
 

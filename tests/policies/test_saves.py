@@ -9,18 +9,20 @@ from rocketdrl_ma.physics import BallState, CarControls, CarState, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.policies import saves
 from rocketdrl_ma.policies.scripted import make_scripted
+from rocketdrl_ma.engine import GameEngine
 from rocketdrl_ma.rules import Match
 
 
 def test_the_roof_height_of_a_held_jump_follows_the_simulated_car():
     m = Match(team_size=1, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(0))
+    engine = GameEngine([m])
+    engine.reset_game(0, 0)
     m.cars["blue_0"].set_state(CarState(pos=np.array([0.0, -4000.0, 17.0]), on_ground=True))
     m.arena.ball.set_state(BallState(pos=np.array([3000.0, 0.0, 93.0])))
-    m.advance({"blue_0": CarControls(), "orange_0": CarControls()}, 16)
+    engine.step([{"blue_0": CarControls(), "orange_0": CarControls()}], 16)
     errors = []
     for k in range(1, 13):  # 0.4 s in steps of 4 ticks, the button held throughout
-        m.advance({"blue_0": CarControls(jump=True), "orange_0": CarControls()}, 4)
+        engine.step([{"blue_0": CarControls(jump=True), "orange_0": CarControls()}], 4)
         centre_z = float(m.game_state().cars["blue_0"].pos[2])
         errors.append(saves.roof_height_uu(k * 4 / C.TICK_RATE_HZ) - saves.ROOF_ABOVE_CENTRE_UU - centre_z)
     assert max(abs(e) for e in errors) < 10.0, np.round(errors, 1)
@@ -44,7 +46,8 @@ def _shot_over_the_keeper(speed_uu_s: float, height_uu: float, aside_uu: float, 
     the keeper's line at ``height_uu``, ``aside_uu`` to its side. Whether it went in, whether the keeper left the
     floor, and who touched the ball first."""
     m = Match(team_size=2, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(0))
+    engine = GameEngine([m])
+    engine.reset_game(0, 0)
     for agent, x in (("orange_0", 3000.0), ("orange_1", -3000.0)):
         m.cars[agent].set_state(CarState(pos=np.array([x, 4000.0, 17.0]), on_ground=True))
     m.cars["blue_0"].set_state(CarState(pos=np.array([600.0, -1500.0, 17.0]), rot_mat=yaw_rot_mat(-np.pi / 2),
@@ -60,7 +63,7 @@ def _shot_over_the_keeper(speed_uu_s: float, height_uu: float, aside_uu: float, 
     for _ in range(40):
         state = m.game_state()
         jumped |= not state.cars["blue_1"].on_ground
-        m.advance({a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}, 8)
+        engine.step([{a: (rotator if a.startswith("blue") else idle).controls(a, state) for a in m.cars}], 8)
         first_touch = first_touch or m.game_state().last_touch
         if m.game_state().score != (0, 0):
             break

@@ -8,17 +8,19 @@ import pytest
 import rocketdrl_ma
 from rocketdrl_ma.env.actions import LookupTableActions
 from rocketdrl_ma.policies.scripted import make_scripted
+from rocketdrl_ma.engine import GameEngine
 from rocketdrl_ma.rules import Match
 from processes import two_processes
 
 
 def _play(blue: str, orange: str, clock_s: float, seed: int = 0) -> Match:
     m = Match(team_size=1, clock_s=clock_s, kickoff_countdown_s=3.0)
-    m.reset(np.random.default_rng(seed))
+    engine = GameEngine([m])
+    engine.reset_game(0, seed)
     bots = {"blue_0": make_scripted(blue), "orange_0": make_scripted(orange)}
     while not (m.is_terminated() or m.is_truncated()):
         state = m.game_state()
-        m.advance({agent: bots[agent].controls(agent, state) for agent in m.cars}, 8)
+        engine.step([{agent: bots[agent].controls(agent, state) for agent in m.cars}], 8)
     return m
 
 
@@ -54,7 +56,8 @@ def test_flip_chaser_controls_are_rows_of_the_lookup_table():
     """Every decision of a match (kickoff dodges included) survives encode and parse unchanged, so the bot
     plays the same in a lookup-table env and a lookup clone can copy it exactly."""
     m = Match(team_size=1, clock_s=40.0, kickoff_countdown_s=0.0)
-    m.reset(np.random.default_rng(3))
+    engine = GameEngine([m])
+    engine.reset_game(0, 3)
     bot, chaser, table = make_scripted("flip_chaser"), make_scripted("ball_chaser"), LookupTableActions()
     jumps = 0
     while not (m.is_terminated() or m.is_truncated()):
@@ -63,7 +66,7 @@ def test_flip_chaser_controls_are_rows_of_the_lookup_table():
         mine = controls["blue_0"]
         assert table.parse("blue_0", table.encode(mine)) == mine
         jumps += mine.jump
-        m.advance(controls, 8)
+        engine.step([controls], 8)
     assert jumps >= 2  # at least one kickoff's jump and dodge were among them
 
 
@@ -74,13 +77,14 @@ def test_flip_chaser_touches_the_ball_first_at_kickoffs():
     for seed in range(6):
         for blue, orange in (("flip_chaser", "ball_chaser"), ("ball_chaser", "flip_chaser")):
             m = Match(team_size=1, clock_s=30.0, kickoff_countdown_s=0.0)
-            m.reset(np.random.default_rng(seed))
+            engine = GameEngine([m])
+            engine.reset_game(0, seed)
             bots = {"blue_0": make_scripted(blue), "orange_0": make_scripted(orange)}
             for _ in range(150):  # 10 s: kickoffs are touched in about 3
                 if m.last_touch is not None:
                     break
                 state = m.game_state()
-                m.advance({agent: bots[agent].controls(agent, state) for agent in m.cars}, 8)
+                engine.step([{agent: bots[agent].controls(agent, state) for agent in m.cars}], 8)
             first += bots[m.last_touch].name == "scripted:flip_chaser"
     assert first >= 10, first
 

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from rocketdrl_ma.engine import GameEngine
 from rocketdrl_ma.physics import BallState, CarControls, CarState, DemoMode, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules import Match
@@ -11,8 +12,9 @@ IDLE = {}
 
 def _match(**kw):
     m = Match(**{"kickoff_countdown_s": 0.0, **kw})
-    m.reset(np.random.default_rng(0))
-    return m
+    engine = GameEngine([m])
+    engine.reset_game(0, 0)
+    return m, engine
 
 
 def _idle(m):
@@ -24,9 +26,9 @@ def _shoot_into_orange_goal(m):
 
 
 def test_goal_scores_resets_to_kickoff_and_rewards_both_teams():
-    m = _match(team_size=2)
+    m, engine = _match(team_size=2)
     _shoot_into_orange_goal(m)
-    m.advance(_idle(m), 60)
+    engine.step([_idle(m)], 60)
     state = m.game_state()
     assert state.score == (1, 0)
     assert [e.team for e in state.events if e.kind == "goal"] == ["blue"]
@@ -37,57 +39,57 @@ def test_goal_scores_resets_to_kickoff_and_rewards_both_teams():
 
 
 def test_kickoff_countdown_freezes_cars_and_clock():
-    m = _match(kickoff_countdown_s=3.0)
+    m, engine = _match(kickoff_countdown_s=3.0)
     start = m.cars["blue_0"].get_state().pos.copy()
-    m.advance({a: CarControls(throttle=1.0, boost=True) for a in m.cars}, 120)
+    engine.step([{a: CarControls(throttle=1.0, boost=True) for a in m.cars}], 120)
     assert np.allclose(m.cars["blue_0"].get_state().pos[:2], start[:2], atol=1.0)
     assert m.game_state().kickoff_pending and m.clock_s == pytest.approx(300.0)
-    m.advance({a: CarControls(throttle=1.0, boost=True) for a in m.cars}, 480)  # 2 s frozen, then 2 s live
+    engine.step([{a: CarControls(throttle=1.0, boost=True) for a in m.cars}], 480)  # 2 s frozen, then 2 s live
     assert np.linalg.norm(m.cars["blue_0"].get_state().pos[:2] - start[:2]) > 300.0
     assert m.clock_s < 300.0 - 1.0
 
 
 def test_clock_runs_out_and_the_match_ends_when_the_ball_lands():
-    m = _match(clock_s=1.0)
+    m, engine = _match(clock_s=1.0)
     _shoot_into_orange_goal(m)
-    m.advance(_idle(m), 60)  # 1-0
+    engine.step([_idle(m)], 60)  # 1-0
     m.arena.ball.set_state(BallState(pos=np.array([0.0, 0.0, 600.0]), vel=np.array([0.0, 0.0, 1.0])))
-    m.advance(_idle(m), 120)  # the clock hits 0:00 while the ball is in the air
+    engine.step([_idle(m)], 120)  # the clock hits 0:00 while the ball is in the air
     assert m.clock_s == 0.0
     for _ in range(60):
         if m.is_terminated():
             break
-        m.advance(_idle(m), 8)
+        engine.step([_idle(m)], 8)
     assert m.is_terminated()
     assert m.game_state().ball.pos[2] < C.BALL_RADIUS + 10.0
     assert m.summary()["winner"] == "blue"
 
 
 def test_tied_at_zero_goes_to_golden_goal_overtime():
-    m = _match(clock_s=0.5)
-    m.advance(_idle(m), 120)
+    m, engine = _match(clock_s=0.5)
+    engine.step([_idle(m)], 120)
     assert m.overtime and not m.is_terminated()
     assert any(e.kind == "overtime" for e in m.events) or m.overtime
     _shoot_into_orange_goal(m)
-    m.advance(_idle(m), 60)
+    engine.step([_idle(m)], 60)
     assert m.is_terminated() and m.summary()["winner"] == "blue"
 
 
 def test_overtime_limit_truncates():
-    m = _match(clock_s=0.1, overtime_limit_s=1.0)
-    m.advance(_idle(m), 240)
+    m, engine = _match(clock_s=0.1, overtime_limit_s=1.0)
+    engine.step([_idle(m)], 240)
     assert m.is_truncated() and not m.is_terminated()
 
 
 def test_touch_shot_and_scorer_are_reported():
-    m = _match()
+    m, engine = _match()
     m.arena.ball.set_state(BallState(pos=np.array([0.0, 3500.0, C.BALL_REST_Z])))
     m.cars["blue_0"].set_state(CarState(pos=np.array([0.0, 2900.0, 17.0]), rot_mat=yaw_rot_mat(np.pi / 2),
                                         vel=np.array([0.0, 2000.0, 0.0]), on_ground=True))
     m.cars["orange_0"].set_state(CarState(pos=np.array([3000.0, 0.0, 17.0])))
     kinds = []
     for _ in range(20):
-        m.advance({"blue_0": CarControls(throttle=1.0), "orange_0": CarControls()}, 8)
+        engine.step([{"blue_0": CarControls(throttle=1.0), "orange_0": CarControls()}], 8)
         kinds += [(e.kind, e.credited_to) for e in m.events]
     assert ("touch", "blue_0") in kinds
     assert ("shot", "blue_0") in kinds
@@ -98,8 +100,9 @@ def test_touch_shot_and_scorer_are_reported():
 def test_shaping_terms_are_reported_separately():
     m = Match(team_size=1, kickoff_countdown_s=0.0,
               reward_weights={"touch": 1.0, "player_velocity_to_ball": 0.5, "boost": 0.1})
-    m.reset(np.random.default_rng(3))
-    m.advance({a: CarControls(throttle=1.0) for a in m.cars}, 60)
+    engine = GameEngine([m])
+    engine.reset_game(0, 3)
+    engine.step([{a: CarControls(throttle=1.0) for a in m.cars}], 60)
     reward, terms = m.weighted_rewards("blue_0", m.game_state())
     assert set(terms) == set(Match.REWARD_TERMS)
     assert terms["player_velocity_to_ball"] > 0.0  # driving at the ball from a kickoff spot
@@ -113,23 +116,23 @@ def test_unknown_reward_term_is_named():
 
 
 def test_switching_off_boost_pads_and_demos():
-    m = _match(boost_pads=False, demos=False)
+    m, engine = _match(boost_pads=False, demos=False)
     car = m.cars["blue_0"]
     pad = C.BOOST_PAD_POSITIONS[int(np.flatnonzero(C.BOOST_PAD_IS_BIG)[0])]
     car.set_state(CarState(pos=np.array([pad[0], pad[1], 17.0]), boost=10.0))
-    m.advance(_idle(m), 4)
+    engine.step([_idle(m)], 4)
     assert car.get_state().boost == pytest.approx(10.0)
     assert m.arena.get_mutator_config().demo_mode == DemoMode.DISABLED
 
 
 def test_a_ball_resting_on_a_car_is_a_touch_per_landing_not_one_per_tick():
-    m = _match()
+    m, engine = _match()
     car = m.cars["blue_0"]
     car.set_state(CarState(pos=[0.0, -2000.0, C.CAR_SPAWN_REST_Z], rot_mat=yaw_rot_mat(np.pi / 2), on_ground=True))
     m.arena.ball.set_state(BallState(pos=[0.0, -2000.0, 150.0], vel=[0.0, 0.0, -1.0]))  # dropped onto the roof
     touches = 0
     for _ in range(15):
-        m.advance({"blue_0": CarControls(), "orange_0": CarControls()}, 8)
+        engine.step([{"blue_0": CarControls(), "orange_0": CarControls()}], 8)
         touches += sum(e.kind == "touch" for e in m.events)
     # it lands, hops once off the hit impulse, lands again and rests there for 100+ ticks of contact
     assert 1 <= touches <= 2

@@ -7,6 +7,7 @@ import rocketdrl_ma
 from rocketdrl_ma.physics import (BallState, BallTouch, BoostPadTaken, CarControls, CarDemolished, CarState,
                                   yaw_rot_mat)
 from rocketdrl_ma.physics import constants as C
+from rocketdrl_ma.engine import GameEngine
 from rocketdrl_ma.rules import Match
 from rocketdrl_ma.rules.team_metrics import TEAM_LOG_METRICS, TeamMetrics, team_log_vector
 
@@ -16,8 +17,9 @@ NORTH = np.pi / 2  # facing +y, the orange goal
 
 def _match(team_size=2, **kw):
     m = Match(team_size=team_size, kickoff_countdown_s=0.0, **kw)
-    m.reset(np.random.default_rng(0))
-    return m
+    engine = GameEngine([m])
+    engine.reset_game(0, 0)
+    return m, engine
 
 
 def _place(m, agent, x, y, yaw=NORTH, speed=0.0, boost=0.0):
@@ -34,11 +36,12 @@ def _park_everyone(m):
         _place(m, agent, *spots[agent])
 
 
-def _run(m, seconds, controls=None):
+def _run(engine, seconds, controls=None):
     """Advance in decisions of 8 ticks; every game event on the way."""
+    m = engine.games[0]
     events = []
     for _ in range(int(round(seconds * 15))):
-        m.advance(controls or {}, 8)
+        engine.step([controls or {}], 8)
         events += m.game_state().events
     return events
 
@@ -51,13 +54,13 @@ def _kick(m, agent, ball_xy, from_xy, speed=1200.0):
 
 
 def test_a_set_up_pass_that_ends_in_a_goal_is_a_pass_and_an_assist():
-    m = _match()
+    m, engine = _match()
     _park_everyone(m)
     _kick(m, "blue_0", (-1500.0, 0.0), (-1700.0, 0.0))            # the pass leaves blue_0...
-    events = _run(m, 1.5)
+    events = _run(engine, 1.5)
     assert [e.agent for e in events if e.kind == "touch"] == ["blue_0"]
     _kick(m, "blue_1", (0.0, 4300.0), (0.0, 4000.0), speed=1500.0)  # ...and reaches blue_1 in front of goal
-    events = _run(m, 2.0)
+    events = _run(engine, 2.0)
     goals = [e for e in events if e.kind == "goal"]
     assert [(g.team, g.scorer) for g in goals] == [("blue", "blue_1")]
     summary = m.summary()
@@ -69,40 +72,40 @@ def test_a_set_up_pass_that_ends_in_a_goal_is_a_pass_and_an_assist():
 
 
 def test_an_opponent_touch_in_between_is_no_pass():
-    m = _match()
+    m, engine = _match()
     _park_everyone(m)
     _kick(m, "blue_0", (-1500.0, 0.0), (-1700.0, 0.0))
-    _run(m, 1.2)
+    _run(engine, 1.2)
     _kick(m, "orange_0", (1500.0, 0.0), (1700.0, 0.0))  # the opponents get it first
-    _run(m, 1.2)
+    _run(engine, 1.2)
     _kick(m, "blue_1", (0.0, 4300.0), (0.0, 4000.0), speed=1500.0)
-    _run(m, 2.0)
+    _run(engine, 2.0)
     summary = m.summary()
     assert summary["score"] == {"blue": 1, "orange": 0}
     assert summary["team"]["blue"]["passes"] == 0 and summary["team"]["blue"]["assists"] == 0
 
 
 def test_a_slow_pass_and_a_goal_long_after_it_is_a_pass_without_assist():
-    m = _match()
+    m, engine = _match()
     _park_everyone(m)
     _kick(m, "blue_0", (-1500.0, 0.0), (-1700.0, 0.0))
-    _run(m, 1.5)
+    _run(engine, 1.5)
     _kick(m, "blue_1", (0.0, 0.0), (0.0, -200.0), speed=500.0)  # received in midfield: a pass
-    _run(m, 6.0)                                                 # the ball rolls; nobody touches it again
+    _run(engine, 6.0)                                                 # the ball rolls; nobody touches it again
     m.arena.ball.set_state(BallState(pos=np.array([0.0, 4900.0, 200.0]), vel=np.array([0.0, 2000.0, 0.0])))
-    _run(m, 1.0)
+    _run(engine, 1.0)
     summary = m.summary()
     assert summary["score"]["blue"] == 1
     assert summary["team"]["blue"]["passes"] == 1 and summary["team"]["blue"]["assists"] == 0
 
 
 def test_two_team_mates_on_the_ball_within_a_second_is_a_double_commit():
-    m = _match()
+    m, engine = _match()
     _park_everyone(m)
     m.arena.ball.set_state(BallState(pos=np.array([0.0, 0.0, C.BALL_RADIUS])))
     _place(m, "blue_0", -300.0, 0.0, yaw=0.0, speed=800.0)    # from both sides at once
     _place(m, "blue_1", 300.0, 0.0, yaw=np.pi, speed=800.0)
-    events = _run(m, 1.0)
+    events = _run(engine, 1.0)
     touchers = {e.agent for e in events if e.kind == "touch"}
     assert touchers == {"blue_0", "blue_1"}
     summary = m.summary()
@@ -111,7 +114,7 @@ def test_two_team_mates_on_the_ball_within_a_second_is_a_double_commit():
 
 
 def test_demos_boost_collected_distance_and_last_back_share():
-    m = _match()
+    m, engine = _match()
     _park_everyone(m)
     # blue_0 supersonic into orange_0 (a demo); blue_1 parked on a big pad with an empty tank
     _place(m, "orange_0", 0.0, 1000.0, yaw=0.0)
@@ -120,7 +123,7 @@ def test_demos_boost_collected_distance_and_last_back_share():
     pad = C.BOOST_PAD_POSITIONS[big]
     _place(m, "blue_1", pad[0], pad[1], boost=0.0)
     m.arena.ball.set_state(BallState(pos=np.array([3000.0, 0.0, C.BALL_RADIUS])))
-    events = _run(m, 1.0, {"blue_0": CarControls(throttle=1.0, boost=True)})
+    events = _run(engine, 1.0, {"blue_0": CarControls(throttle=1.0, boost=True)})
     assert [(e.agent, e.victim) for e in events if e.kind == "demo"] == [("blue_0", "orange_0")]
     summary = m.summary()
     assert summary["stats"]["blue_0"]["demos"] == 1 and summary["team"]["blue"]["demos"] == 1
@@ -132,9 +135,9 @@ def test_demos_boost_collected_distance_and_last_back_share():
 
 
 def test_team_mate_distance_is_the_mean_over_pairs_and_none_for_a_team_of_one():
-    m = _match(team_size=1, orange_size=3)
+    m, engine = _match(team_size=1, orange_size=3)
     _park_everyone(m)
-    _run(m, 1.0)
+    _run(engine, 1.0)
     team = m.summary()["team"]
     assert team["blue"]["mean_teammate_distance_uu"] is None
     assert team["blue"]["last_back_share"] == {"blue_0": 1.0}

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from rocketdrl_ma.env.parallel_env import RocketDRLParallelEnv
+from rocketdrl_ma.env.learner_game import LearnerGame
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.registry import load_teacher
 from rocketdrl_ma.rules.state import TEAM_NAMES, agent_team
@@ -78,7 +78,7 @@ class EnvPool:
                  shaping: dict[str, float] | None = None, autoreset: bool = True, teacher: str | None = None):
         overrides = {**(overrides or {}), "info_format": "full"}
         self.vec = VectorEnv(config, n_arenas=n_envs, autoreset=False, **overrides)
-        self.envs: list[RocketDRLParallelEnv] = self.vec.lanes
+        self.envs: list[LearnerGame] = self.vec.lanes
         first = self.envs[0]
         self.agents = list(first.possible_agents)
         self.n_rows = n_envs * len(self.agents)

@@ -9,6 +9,7 @@ from typing import Callable, Iterable
 import numpy as np
 import torch
 
+from rocketdrl_ma.engine import float32_controls
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.base import Policy
 
@@ -104,16 +105,16 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
     winning (a minigame's: more goals than misses), the return that of ``side``'s cars.
 
     Every car is a ``Policy`` acting through its own observation builder and action parser, as in a league match,
-    and the env takes their controls through the lossless ``continuous`` parser, so a policy trained with other
-    sensors or actions (the seed's) plays as it learned. The cars of policies sharing one model (``batched.seat``)
-    go through one forward of it per decision, each with the action its own forward gives. Each of the ``n_envs``
+    and its controls go to the game as they are (at float32 resolution, ``engine.float32_controls``), so a policy
+    trained with other sensors or actions (the seed's) plays as it learned. The cars of policies sharing one model
+    (``batched.seat``) go through one forward of it per decision, each with the action its own forward gives. Each of the ``n_envs``
     copies (seeded ``seed + i``) plays a fixed quota of its first episodes, so short episodes are not favoured."""
     if side not in TEAMS:
         raise ValueError(f"side: expected one of {list(TEAMS)}, got {side!r}")
     if episodes < 1:
         raise ValueError(f"episodes: must be >= 1, got {episodes}")
     vec = VectorEnv(config, n_arenas=n_envs, autoreset=False,
-                    **{**overrides, "action": "continuous", "info_format": "full"})
+                    **{**overrides, "info_format": "full"})
     try:
         mine = [a for a in vec.possible_agents if a.startswith(side)]
         theirs = [a for a in vec.possible_agents if a not in mine]
@@ -137,9 +138,9 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
             controls = cars_controls([(players[k][a], a, lane.game_state) for k, lane in enumerate(vec.lanes)
                                       for a in vec.possible_agents])
             n_agents = len(vec.possible_agents)
-            actions = np.stack([[lane.action_parser.encode(c) for c in controls[k * n_agents:(k + 1) * n_agents]]
-                                for k, lane in enumerate(vec.lanes)])
-            _, rewards, terminated, truncated, infos = vec.step(actions)
+            _, rewards, terminated, truncated, infos = vec.step(None, [
+                float32_controls(dict(zip(vec.possible_agents, controls[k * n_agents:(k + 1) * n_agents])))
+                for k in range(n_envs)])
             returns += rewards[:, columns].mean(axis=1)
             lengths += 1
             ended = terminated | truncated

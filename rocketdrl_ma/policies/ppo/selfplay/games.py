@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from rocketdrl_ma.engine import float32_controls
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.policies.ppo.config import TrainConfig
 from rocketdrl_ma.policies.ppo.envs import Episode, StepResult
@@ -136,18 +137,19 @@ class SelfPlayGames:
         until ``reset_copies``. Also returns [copies, 2]: goals for and against the learner's team."""
         learner_actions = np.asarray(learner_actions)
         full = np.zeros((len(self.envs), len(self.agents)) + learner_actions.shape[1:], learner_actions.dtype)
+        scripted_controls: list[dict] = [{} for _ in self.envs]
         n_scripted = len(self.sp.scripted)
         for i, env in enumerate(self.envs):
             rows, side = self.rows(i), self.opponent_team(i)
             full[i, self.team_columns[self.learner_team[i]]] = learner_actions[rows]
             scripted = self.opponent[i] - 1
-            if 0 <= scripted < n_scripted:
+            if 0 <= scripted < n_scripted:  # the bot's controls go to the game, at the learner's resolution
                 bot, state = self.scripted[i][scripted], env.game_state
-                for col, agent in zip(self.team_columns[side], self.team_agents[side]):
-                    full[i, col] = env.action_parser.encode(bot.controls(agent, state))
+                scripted_controls[i] = float32_controls({agent: bot.controls(agent, state)
+                                                         for agent in self.team_agents[side]})
             else:
                 full[i, self.team_columns[side]] = opponent_actions[rows]
-        obs_all, rewards, term, trunc, infos = self.vec.step(full)
+        obs_all, rewards, term, trunc, infos = self.vec.step(full, scripted_controls)
         self._obs[:] = obs_all
         reward = np.zeros(self.n_rows, np.float32)
         shaping = np.zeros(self.n_rows, np.float32)
