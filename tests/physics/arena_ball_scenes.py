@@ -99,17 +99,18 @@ def ball_grid() -> list[GridScene]:
     return scenes
 
 
-def run_ours(scenes: list[GridScene], batch_size: int = 128) -> list[np.ndarray]:
-    """The ball's velocity after every tick ((ticks, 3) each) in our game-shaped arena, ``batch_size`` at once."""
+def run_ours(scenes: list[GridScene], batch_size: int = 128, arena_shape: str = "game") -> list[np.ndarray]:
+    """The ball's velocity after every tick ((ticks, 3) each) in our arena of ``arena_shape``, ``batch_size`` at
+    once."""
     out: list[np.ndarray] = []
     for start in range(0, len(scenes), batch_size):
-        out += _run_ours_batch([s.scene for s in scenes[start:start + batch_size]])
+        out += _run_ours_batch([s.scene for s in scenes[start:start + batch_size]], arena_shape)
     return out
 
 
-def _run_ours_batch(scenes: list[BallScene]) -> list[np.ndarray]:
+def _run_ours_batch(scenes: list[BallScene], arena_shape: str) -> list[np.ndarray]:
     from rocketdrl_ma.physics import ArenaBatch, BallState, MutatorConfig
-    batch = ArenaBatch(len(scenes), tick_rate=TICK_RATE, arena_shape="game")
+    batch = ArenaBatch(len(scenes), tick_rate=TICK_RATE, arena_shape=arena_shape)
     try:
         (gravity_z,) = {s.gravity_z for s in scenes}  # the arenas of a batch share one gravity
         batch.set_mutator_config(MutatorConfig(gravity_z_uu_s2=gravity_z))
