@@ -38,6 +38,9 @@ class SurfaceFamily:
 _H = math.sqrt(0.5)
 SIDE_Y = 1440.0  # away from the meshes' seams at x = 0 and y = 0 (the game's mirror planes)
 _S40, _C40 = math.sin(math.radians(40.0)), math.cos(math.radians(40.0))
+# the net's back is a polygon too (vertices every 11.6 degrees about (|y|, z) = (5760, 256), columns every 256 uu
+# in x): aim between its vertices and off its quads' diagonals, at 5.8 degrees up and a quarter quad in x
+_S_BACK, _C_BACK = math.sin(math.radians(5.81)), math.cos(math.radians(5.81))
 
 # 40 degrees round each fillet from the wall (between the polygons' vertices at 34 and 45); the flat walls
 # above the fillets' tops (256 on the side walls, 160 on the back walls) and high up; the corner wall between its
@@ -55,7 +58,8 @@ FAMILIES = {
     "corner": SurfaceFamily((3523.0, 4541.0, 600.0), (-_H, -_H, 0.0), (_H, -_H, 0.0)),
     "post": SurfaceFamily((900.0, 5124.0, 300.0), (-_H, -_H, 0.0), (-_H, _H, 0.0)),
     "crossbar": SurfaceFamily((300.0, 5124.0, 644.0), (0.0, -_H, -_H), (0.0, _H, -_H)),
-    "goal_back": SurfaceFamily((300.0, 6000.0, 256.0), (0.0, -1.0, 0.0), (1.0, 0.0, 0.0)),
+    "goal_back": SurfaceFamily((320.0, 5760.0 + 240.0 * _C_BACK, 256.0 + 240.0 * _S_BACK), (0.0, -_C_BACK, -_S_BACK),
+                               (1.0, 0.0, 0.0)),
 }
 
 
