@@ -42,9 +42,10 @@ _S40, _C40 = math.sin(math.radians(40.0)), math.cos(math.radians(40.0))
 # in x): aim between its vertices and off its quads' diagonals, at 5.8 degrees up and a quarter quad in x
 _S_BACK, _C_BACK = math.sin(math.radians(5.81)), math.cos(math.radians(5.81))
 
-# 40 degrees round each fillet from the wall (between the polygons' vertices at 34 and 45); the flat walls
-# above the fillets' tops (256 on the side walls, 160 on the back walls) and high up; the corner wall between its
-# vertical roundings; the +x post's and the crossbar's 45 degree bevels at their middle; the net's back.
+# 40 degrees round each fillet from the floor or ceiling (between the polygons' vertices at 45 and 56 from the
+# wall); the flat walls above the fillets' tops (256 on the side walls, 160 on the back walls) and high up; the
+# corner wall between its vertical roundings; the +x post's and the crossbar's 45 degree bevels at their middle;
+# the net's back.
 FAMILIES = {
     "floor_fillet_side": SurfaceFamily((3840.0 + 256.0 * _S40, SIDE_Y, 256.0 - 256.0 * _C40), (-_S40, 0.0, _C40),
                                        (0.0, 1.0, 0.0)),
