@@ -9,7 +9,8 @@ speeds 6 ticks after the hit), then the signed distance from our analytic arena 
 (tests/physics/arena_mesh_profile.py), if rlgym-rocket-league's meshes are installed.
 
 Run from the repo root: ``python benchmarks/fidelity.py`` (``--rocketsim-only`` skips our engine,
-``--arena-mesh-only`` prints the two arena-mesh tables alone, ``--arena-shape game`` measures the game shape).
+``--arena-mesh-only`` prints the two arena-mesh tables alone, ``--arena-shape game`` measures the game shape,
+``--arena-ball-grid-only`` prints the game shape's ball grid alone).
 The scenario and adapter code lives in tests/physics/ (fidelity_scenarios.py, rocketsim_oracle.py) and is shared with
 tests/physics/test_fidelity.py.
 """
@@ -117,10 +118,38 @@ def print_arena_mesh_tables(n_mesh_points: int, seed: int, arena_shape: str = "c
     print(format_measurements(measure_game_arena(folder)))
 
 
+def print_arena_ball_grid() -> None:
+    """The game shape's ball grid (tests/physics/arena_ball_scenes.py) against RocketSim on the meshes, worst case
+    per surface family over its speeds, incidences and phases."""
+    import arena_ball_scenes as grid
+    from rocketsim_mesh_oracle import ball_trajectories_on_meshes, mesh_folder_or_none
+    folder = mesh_folder_or_none()
+    if folder is None:
+        print("Ball grid on the game shape: skipped, rlgym-rocket-league's collision meshes are not installed.")
+        return
+    scenes = grid.ball_grid()
+    theirs = ball_trajectories_on_meshes([s.scene for s in scenes], folder)
+    pairs = grid.outgoing_pairs(scenes, [t.vel for t in theirs], grid.run_ours(scenes))
+    worst: dict[str, list] = {}
+    for scene in scenes:
+        speed, angle = grid.speed_and_angle_error(*reversed(pairs[scene.key]))
+        entry = worst.setdefault(scene.family, [0.0, 0.0, {}])
+        entry[0], entry[1] = max(entry[0], 100.0 * abs(speed)), max(entry[1], angle)
+        cell = grid.cell_of(scene.key)
+        entry[2][cell] = entry[2].get(cell, True) and abs(speed) <= 0.05 and angle <= 2.0
+    print(f"| ball off the game shape ({len(grid.SPEEDS_UU_S)} speeds x {len(grid.INCIDENCES_DEG)} incidences x "
+          f"{grid.PHASES} phases a family) | worst speed error % | worst angle (deg) | cells within 5 % / 2 deg |")
+    print("|---|---:|---:|---:|")
+    for family, (speed, angle, cells) in worst.items():
+        print(f"| {family} | {speed:.2f} | {angle:.2f} | {sum(cells.values())} of {len(cells)} |")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rocketsim-only", action="store_true", help="do not run our engine")
     ap.add_argument("--arena-mesh-only", action="store_true", help="print only the arena-mesh tables")
+    ap.add_argument("--arena-ball-grid-only", action="store_true",
+                    help="print only the game shape's ball grid against RocketSim on the meshes")
     ap.add_argument("--mesh-points", type=int, default=100_000, help="points sampled on the game's meshes")
     ap.add_argument("--mesh-seed", type=int, default=0)
     ap.add_argument("--arena-shape", choices=("classic", "game"), default="classic",
@@ -130,6 +159,9 @@ def main(argv=None) -> int:
         ap.error(f"--mesh-points must be >= 1, got {args.mesh_points}")
     if args.arena_mesh_only:
         print_arena_mesh_tables(args.mesh_points, args.mesh_seed, args.arena_shape)
+        return 0
+    if args.arena_ball_grid_only:
+        print_arena_ball_grid()
         return 0
 
     init_rocketsim(tempfile.mkdtemp(prefix="rocketsim_dummy_meshes_"))
@@ -181,6 +213,8 @@ def main(argv=None) -> int:
         print_contact_grids()
         print()
         print_arena_mesh_tables(args.mesh_points, args.mesh_seed, args.arena_shape)
+        print()
+        print_arena_ball_grid()
 
     print()
     if ours_err:

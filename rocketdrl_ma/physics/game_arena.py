@@ -431,13 +431,14 @@ def _add_field_point(out, n, x, y, z, qx, qy, qz, reach):
 
 
 @njit(cache=True, nogil=True)
-def _fillet_contacts(out, n, a, b, r, wall_is_a_plane, wx, wy, zs, reach):
+def _fillet_contacts(out, n, a, b, r, wall_is_a_plane, wx, wy, zs, reach, x, y, z):
     """The faces and edges of one fillet's polygon within reach of a centre at (a from the wall, b from the floor
     or ceiling), as Bullet's sphere-triangle test with RocketSim's internal-edge adjustment gives them: a chord's
     nearest point with its normal, and at an edge between two faces (chords, or the first chord and a mesh wall)
     the direction to the centre clamped between the two faces' normals. The mesh runs the outer chords on past
     the floor or ceiling plane and past a side wall's plane, so those ends have no edge. (wx, wy, zs): the 3D
-    directions of a and b's growth."""
+    directions of a and b's growth; (x, y, z) the centre, so that a point of the fillet cut away by a goal's
+    opening (the back walls' floor fillets run on across the goal mouths) makes no contact."""
     n_chords = CHORD_MID.shape[0]
     for c in range(n_chords):
         a0, b0 = r * VERTEX_A[c], r * VERTEX_B[c]
@@ -448,13 +449,13 @@ def _fillet_contacts(out, n, a, b, r, wall_is_a_plane, wx, wy, zs, reach):
         if lo <= u <= hi:  # the face
             da, db = a - (a0 + u * ea), b - (b0 + u * eb)
             d = math.sqrt(da * da + db * db)
-            if d <= reach:
+            if d <= reach and not _in_a_goal_piece(x - da * wx, y - da * wy, z - db * zs):
                 ca, cb = math.cos(CHORD_MID[c]), math.sin(CHORD_MID[c])
                 n = _add(out, n, d, ca * wx, ca * wy, cb * zs)
     for j in range(0 if not wall_is_a_plane else 1, n_chords):  # the edges between faces
         da, db = a - r * VERTEX_A[j], b - r * VERTEX_B[j]
         d = math.sqrt(da * da + db * db)
-        if d > reach or d <= 1e-9:
+        if d > reach or d <= 1e-9 or _in_a_goal_piece(x - da * wx, y - da * wy, z - db * zs):
             continue
         phi = math.atan2(db, da)
         phi = min(max(phi, CHORD_MID[j - 1] if j > 0 else 0.0), CHORD_MID[j])
@@ -490,7 +491,7 @@ def _field_contacts(x, y, z, reach, out, n):
             continue
         in_fillet = in_fillet or (a < r and b < r)
         zs = 1.0 if k == 0 else -1.0
-        n = _fillet_contacts(out, n, a, b, r, piece == 0, -sx * ox, -sy * oy, zs, reach)
+        n = _fillet_contacts(out, n, a, b, r, piece == 0, -sx * ox, -sy * oy, zs, reach, x, y, z)
     if piece != 0 and 0.0 <= a <= reach and rf <= z <= HEIGHT - RC:  # a mesh wall between the fillets
         n = _add_field_point(out, n, x, y, z, sx * (ax - s * ox), sy * (ay - s * oy), z, reach)
     if not in_fillet:

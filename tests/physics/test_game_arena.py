@@ -94,6 +94,27 @@ def test_a_ball_on_the_floor_and_in_a_fillet_corner():
     assert n >= 1 and min(out[:n, 0]) == pytest.approx(d - 60.0, abs=1e-6)
 
 
+MOUTH_LINES = [(x, z, sy) for x in (-700.0, -300.0, 0.0, 300.0, 700.0) for z in (93.15, 200.0, 450.0)
+               for sy in (1.0, -1.0)]
+
+
+def test_a_ball_goes_into_either_goal_across_the_whole_mouth():
+    """The back walls' floor fillets stop at the goal mouths: a ball rolled or flown at the goal anywhere across
+    its mouth goes in and scores (the contact query once kept the fillet's chords across the opening)."""
+    batch = physics.ArenaBatch(len(MOUTH_LINES), arena_shape="game")
+    try:
+        for arena, (x, z, sy) in zip(batch.arenas, MOUTH_LINES):
+            arena.ball.set_state(physics.BallState(pos=np.array([x, sy * 4300.0, z]),
+                                                   vel=np.array([0.0, sy * 1500.0, 0.0])))
+        batch.step(90)
+        for arena, (x, z, sy) in zip(batch.arenas, MOUTH_LINES):
+            pos = arena.ball.get_state().pos
+            assert sy * pos[1] > GAME_ARENA.back_y + 200.0, f"ball from x = {x}, z = {z} stopped at {pos}"
+            assert arena.scoring_team() == (0 if sy > 0 else 1)
+    finally:
+        batch.close()
+
+
 def test_bullet_mesh_lies_on_the_distance_field_away_from_the_goal_mouths():
     verts, tris = game_arena_mesh(with_floor_and_ceiling=False)
     away = (np.abs(verts[:, 1]) < 4700.0) | (np.abs(verts[:, 0]) > 1500.0)

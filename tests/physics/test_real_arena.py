@@ -39,6 +39,8 @@ GAME_SHAPE_SCENES = {
     "crossbar at z = 640": BallScene(pos=(0.0, 4500.0, 640.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE,
                                      gravity_z=0.0),
     "post at x = 900": BallScene(pos=(900.0, 4500.0, 300.0), vel=(0.0, 1500.0, 0.0), ticks=TICK_RATE, gravity_z=0.0),
+    "into the goal mouth at z = 150": BallScene(pos=(300.0, 4500.0, 150.0), vel=(0.0, 1500.0, 0.0), ticks=60,
+                                                gravity_z=0.0),
     # the same, 6 and 8 uu further on: the first contact tick finds the ball 2 to 4 uu less deep
     "crossbar at z = 640, shallow first contact": BallScene(pos=(128.0, 4506.0, 640.0), vel=(0.0, 1500.0, 0.0),
                                                             ticks=TICK_RATE, gravity_z=0.0),
