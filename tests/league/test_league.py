@@ -123,8 +123,9 @@ def test_killed_league_resumes_without_losing_or_duplicating(tmp_path):
                                       "matches_per_pair": 5}))
     cfg = validate_league_config(yaml.safe_load(config.read_text()))
     db = Path(cfg.results)
-    proc = subprocess.Popen([sys.executable, "-m", "rocketdrl_ma.cli", "league", str(config)], cwd=REPO,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # one match at a time: played at once, the five would end together and leave no third match to kill
+    proc = subprocess.Popen([sys.executable, "-m", "rocketdrl_ma.cli", "league", str(config), "--at-once", "1"],
+                            cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
     def stored() -> int:
         if not db.exists():
