@@ -363,23 +363,29 @@ MEETING_ANGLES = (30.0, 60.0, 90.0, 120.0, 150.0)
 MEETING_SPEEDS = (1000.0, 2000.0)
 
 
-def meeting_scene(angle_deg: float, speed: float, k: int) -> Scene:
+def meeting_scene(angle_deg: float, speed: float, k: int, ahead_uu: float = 0.0) -> Scene:
     """Two team-mates at ``speed`` whose paths cross at (0, 0) ``angle_deg`` apart, mirror images about x = 0 (the
-    diagonal kickoff paths meet at 90 degrees): car 0 comes from -x. Their centres would meet ``SETTLE_TICKS`` in."""
+    diagonal kickoff paths meet at 90 degrees): car 0 comes from -x, ``ahead_uu`` further along its path than the
+    mirror image of car 1 (0: exact mirror images). Their centres would meet ``SETTLE_TICKS`` in."""
     half = math.radians(angle_deg) / 2.0
     lead = SETTLE_TICKS * speed * DT + _phase_shift(speed, k)
     cars = []
     for side in (1.0, -1.0):  # car 0 heads +x, car 1 heads -x
         dx, dy = side * math.sin(half), math.cos(half)
-        cars.append(CarStart((-dx * lead, -dy * lead, CAR_REST_Z), (dx * speed, dy * speed, 0.0),
+        back = lead - (ahead_uu if side > 0.0 else 0.0)
+        cars.append(CarStart((-dx * back, -dy * back, CAR_REST_Z), (dx * speed, dy * speed, 0.0),
                              yaw=math.atan2(dy, dx)))
     coast = {"throttle": 0.01}
-    return Scene(f"meeting-{angle_deg:g}-{speed:g}-{k}", tuple(cars), SETTLE_TICKS + 30, None,
+    ahead = f"-ahead{ahead_uu:g}" if ahead_uu else ""
+    return Scene(f"meeting-{angle_deg:g}-{speed:g}{ahead}-{k}", tuple(cars), SETTLE_TICKS + 30, None,
                  ((0, 0, coast), (0, 1, coast)))
 
 
-def meeting_grid() -> list[Scene]:
-    return [meeting_scene(angle, speed, k) for angle in MEETING_ANGLES for speed in MEETING_SPEEDS
+def meeting_grid(ahead_uu: float = 0.0) -> list[Scene]:
+    """Every meeting angle and speed at every phase; ``ahead_uu`` >= 0 (a key holds no minus sign)."""
+    if ahead_uu < 0.0:
+        raise ValueError(f"ahead_uu: must be >= 0, got {ahead_uu}")
+    return [meeting_scene(angle, speed, k, ahead_uu) for angle in MEETING_ANGLES for speed in MEETING_SPEEDS
             for k in range(PHASES)]
 
 
