@@ -83,8 +83,11 @@ class BulletWorld:
     def _build_static_world(self) -> None:
         cid = self.client
         vertices, indices = _arena_mesh_lists(self.arena_shape)
-        shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, indices=indices,
-                                        flags=pb.GEOM_FORCE_CONCAVE_TRIMESH, physicsClientId=cid)
+        # The game shape's mesh gets Bullet's internal-edge contacts, as RocketSim's meshes do (a box sliding over a
+        # fillet's quads is not kicked sideways by their diagonals).
+        flags = pb.GEOM_FORCE_CONCAVE_TRIMESH | (pb.GEOM_CONCAVE_INTERNAL_EDGE if self.arena_shape == "game" else 0)
+        shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices, indices=indices, flags=flags,
+                                        physicsClientId=cid)
         floor = pb.createCollisionShape(pb.GEOM_PLANE, planeNormal=[0, 0, 1], physicsClientId=cid)
         ceiling = pb.createCollisionShape(pb.GEOM_PLANE, planeNormal=[0, 0, -1], physicsClientId=cid)
         self.static_bodies = [

@@ -579,13 +579,19 @@ def game_arena_raycast(ox, oy, oz, dx, dy, dz, max_len):
 
 # ================================================================= the surface mesh
 ROUNDING_SEGMENTS = 16  # mesh pieces per 45 degrees of a vertical rounding
+WALL_END_GAP = 0.01     # uu: a flat wall's last mesh station before its rounding's tangent line
 
 
 def _quadrant_outline() -> list[tuple[float, float, float, float, int, float]]:
     """(x, y, outward nx, ny, piece, parameter) stations along the outline in the first quadrant, from the side
     wall at y = 0 to the back wall at x = 0 (pieces and parameters as ``_floor_fillet`` reads them)."""
     out = []
-    for y in np.linspace(0.0, C1Y, max(2, math.ceil(C1Y / MESH_MAX_EDGE)) + 1)[:-1]:
+    # Each flat wall runs to just short of the rounding's tangent line (the rounding starts 2.0 / 3.3 uu off the
+    # wall there): a quad from the wall's last station to the rounding's first would be twisted off the surface
+    # and left out, and the cars' boxes would go through the wall.
+    side_ys = np.linspace(0.0, C1Y, max(2, math.ceil(C1Y / MESH_MAX_EDGE)) + 1)
+    side_ys[-1] = C1Y - WALL_END_GAP
+    for y in side_ys:
         out.append((SIDE_X, float(y), 1.0, 0.0, 0, 0.0))
     for a in np.linspace(0.0, 0.25 * math.pi, ROUNDING_SEGMENTS + 1):
         out.append((C1X + R1 * math.cos(a), C1Y + R1 * math.sin(a), math.cos(a), math.sin(a), 1, a / (0.25 * math.pi)))
@@ -593,10 +599,9 @@ def _quadrant_outline() -> list[tuple[float, float, float, float, int, float]]:
         out.append((C2X + R2 * math.cos(a), C2Y + R2 * math.sin(a), math.cos(a), math.sin(a), 3,
                     (a - 0.25 * math.pi) / (0.25 * math.pi)))
     xs = sorted({0.0, MOUTH_W, *BACK_TAPER_X.tolist(), *np.linspace(0.0, MOUTH_W, 5).tolist(),
-                 *np.linspace(BACK_TAPER_X[-1], C2X, 5).tolist()}, reverse=True)
+                 *np.linspace(BACK_TAPER_X[-1], C2X - WALL_END_GAP, 5).tolist()}, reverse=True)
     for x in xs:
-        if x < C2X - 1e-6:
-            out.append((float(x), BACK_Y, 0.0, 1.0, 4, 0.0))
+        out.append((float(x), BACK_Y, 0.0, 1.0, 4, 0.0))
     return out
 
 

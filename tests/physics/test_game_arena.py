@@ -125,6 +125,37 @@ def test_bullet_mesh_lies_on_the_distance_field_away_from_the_goal_mouths():
     assert np.abs(game_arena_sdf_many(centroids)).max() < 1.0
 
 
+def test_bullet_mesh_covers_every_wall_ray():
+    """Rays from the field at every wall and the roundings' ends meet the cars' mesh where they meet the distance
+    field (the mesh once left out the walls between each flat wall's last station and the vertical rounding,
+    floor to ceiling: cars' boxes went through them)."""
+    verts, tris = game_arena_mesh(with_floor_and_ceiling=False)
+    cid = pb.connect(pb.DIRECT)
+    try:
+        shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=(verts * M_PER_UU).tolist(),
+                                        indices=tris.reshape(-1).tolist(), flags=pb.GEOM_FORCE_CONCAVE_TRIMESH,
+                                        physicsClientId=cid)
+        pb.createMultiBody(0, shape, physicsClientId=cid)
+        rng = np.random.default_rng(7)
+        yaw = rng.uniform(0.0, 2.0 * np.pi, 2000)
+        z = rng.uniform(30.0, 2000.0, 2000)
+        origins = np.column_stack([np.zeros(2000), np.zeros(2000), z])
+        dirs = np.column_stack([np.cos(yaw), np.sin(yaw), rng.uniform(-0.2, 0.2, 2000)])
+        dirs /= np.linalg.norm(dirs, axis=1)[:, None]
+        expected = np.array([game_arena_raycast(*o, *d, 20000.0)[1] for o, d in zip(origins, dirs)])
+        hits = pb.rayTestBatch((origins * M_PER_UU).tolist(), ((origins + dirs * 20000.0) * M_PER_UU).tolist(),
+                               physicsClientId=cid)
+    finally:
+        pb.disconnect(cid)
+    found = np.array([h[2] * 20000.0 if h[0] >= 0 else np.inf for h in hits])
+    hit = origins + dirs * expected[:, None]
+    walls = (hit[:, 2] > 1.0) & (hit[:, 2] < GAME_ARENA.height - 1.0)  # the floor and ceiling are the world's planes
+    # (a ray grazing the goal frame's bevels can slip between their vertices and the back wall's)
+    walls &= ~((np.abs(hit[:, 1]) > 5100.0) & (np.abs(hit[:, 0]) < 920.0) & (hit[:, 2] < 660.0))
+    assert walls.sum() > 1000
+    assert np.abs(found - expected)[walls].max() < 2.0  # the vertical roundings' chords sag 1.1 uu
+
+
 def _arena_contacts(arena, car) -> np.ndarray:
     """The points (uu) where the car's PyBullet box touches the arena's mesh (not the floor or ceiling planes)."""
     world = arena.batch
