@@ -45,15 +45,26 @@ class RolloutPolicy(TensorDictModuleBase):
     @torch.no_grad()
     def forward(self, tensordict: TensorDictBase) -> TensorDictBase:
         rows = tensordict.batch_size
-        action, log_prob = self.sample(self.model.obs_norm(tensordict.get("observation")))
-        tensordict.set("action", action)
-        tensordict.set("action_log_prob", log_prob)
+        selfplay = {key: tensordict.get(key) for key in self.in_keys[1:]}
+        acted = self.act(tensordict.get("observation"), **selfplay)
         tensordict.set("ctl_difficulty", self.difficulty.expand(rows).clone())
         tensordict.set("ctl_kickstart", self.kickstart.expand(rows).clone())
         tensordict.set("policy_version", self.version.expand(rows).clone())
-        if self.selfplay:
-            self._opponents(tensordict)
+        for key, value in acted.items():
+            tensordict.set(key, value)
         return tensordict
+
+    @torch.no_grad()
+    def act(self, observation: torch.Tensor, opponent_observation: torch.Tensor | None = None,
+            opponent_id: torch.Tensor | None = None, episode_start: torch.Tensor | None = None,
+            opponent_draw: torch.Tensor | None = None) -> dict[str, torch.Tensor]:
+        """One decision of every row, without tensordicts (the lean worker loop's call): ``action`` and
+        ``action_log_prob``, and in self-play ``opponent_id`` / ``opponent_generation`` / ``opponent_action``."""
+        action, log_prob = self.sample(self.model.obs_norm(observation))
+        out = {"action": action, "action_log_prob": log_prob}
+        if self.selfplay:
+            out.update(self._opponents(action, opponent_observation, opponent_id, episode_start, opponent_draw))
+        return out
 
     def sample(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """The learner's action and its log-probability for normalised inputs ``x``: the distributions of the
@@ -74,20 +85,19 @@ class RolloutPolicy(TensorDictModuleBase):
         action = greedy if exploration_type() == ExplorationType.DETERMINISTIC else dist.sample()
         return action, dist.log_prob(action)
 
-    def _opponents(self, tensordict: TensorDictBase) -> None:
+    def _opponents(self, action: torch.Tensor, obs: torch.Tensor, current: torch.Tensor, episode_start: torch.Tensor,
+                   draw: torch.Tensor) -> dict[str, torch.Tensor]:
         cdf = torch.cumsum(self.opponent_probs, 0)
-        chosen = torch.searchsorted(cdf, tensordict.get("opponent_draw").contiguous(), right=True)
+        chosen = torch.searchsorted(cdf, draw.contiguous(), right=True)
         chosen = chosen.clamp(max=len(cdf) - 1)
-        opponent = torch.where(tensordict.get("episode_start"), chosen, tensordict.get("opponent_id"))
-        tensordict.set("opponent_id", opponent)
-        tensordict.set("opponent_generation", self.opponent_generations[opponent])
-        obs = tensordict.get("opponent_observation")
-        action = torch.zeros_like(tensordict.get("action"))
+        opponent = torch.where(episode_start, chosen, current)
+        opponent_action = torch.zeros_like(action)
         first_slot = 1 + self.n_scripted
         for index in torch.unique(opponent).tolist():
             if 1 <= index < first_slot:
                 continue  # a scripted bot: the env acts for it
             network = self.model if index == 0 else self.slots[index - first_slot]
             rows = opponent == index
-            action[rows] = torch.as_tensor(sample_env_actions(network, obs[rows])).to(action.dtype)
-        tensordict.set("opponent_action", action)
+            opponent_action[rows] = torch.as_tensor(sample_env_actions(network, obs[rows])).to(action.dtype)
+        return {"opponent_id": opponent, "opponent_generation": self.opponent_generations[opponent],
+                "opponent_action": opponent_action}
