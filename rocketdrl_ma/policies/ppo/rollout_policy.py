@@ -12,7 +12,8 @@ parameter or a buffer, and reaches the env as keys the module writes next to ``a
 - in self-play, the opponents: the snapshot slots' networks (``selfplay/pool.py``), the chance of every
   opponent index for a new episode and each slot's generation. A copy that begins an episode gets its
   opponent from the env's uniform draw (inverse CDF: one draw, one opponent, the same for all its rows), and
-  every network opponent's action is sampled here, one batched forward per network.
+  every network opponent's action is sampled here: one forward when the rows play one network, else one stacked
+  forward of all of them (``stacked.py``).
 """
 from __future__ import annotations
 
@@ -22,7 +23,8 @@ from tensordict.nn import TensorDictModuleBase
 from torch import nn
 from torchrl.envs.utils import ExplorationType, exploration_type
 
-from .model import PPOModel, sample_env_actions
+from .model import PPOModel, env_actions, sample_env_actions
+from .stacked import StackedPolicies
 
 
 class RolloutPolicy(TensorDictModuleBase):
@@ -37,6 +39,8 @@ class RolloutPolicy(TensorDictModuleBase):
         self.register_buffer("version", torch.tensor(0, dtype=torch.int64))
         self.register_buffer("opponent_probs", torch.zeros(max(n_opponents, 1)))
         self.register_buffer("opponent_generations", torch.zeros(max(n_opponents, 1), dtype=torch.int64))
+        self._stacked_at: int | None = None
+        self._stacked_policies: StackedPolicies | None = None
         self.in_keys = ["observation"] + (["opponent_observation", "opponent_id", "episode_start", "opponent_draw"]
                                           if self.selfplay else [])
         self.out_keys = ["action", "action_log_prob", "ctl_difficulty", "ctl_kickstart", "policy_version"] + (
@@ -85,6 +89,15 @@ class RolloutPolicy(TensorDictModuleBase):
         action = greedy if exploration_type() == ExplorationType.DETERMINISTIC else dist.sample()
         return action, dist.log_prob(action)
 
+    def _stacked(self) -> StackedPolicies:
+        """The learner's and every slot's policy stacked; rebuilt when the weights change, which they do only with
+        an update (``version``: snapshots fill their slots right after one)."""
+        version = int(self.version)
+        if self._stacked_at != version:
+            self._stacked_policies = StackedPolicies([self.model, *self.slots])
+            self._stacked_at = version
+        return self._stacked_policies
+
     def _opponents(self, action: torch.Tensor, obs: torch.Tensor, current: torch.Tensor, episode_start: torch.Tensor,
                    draw: torch.Tensor) -> dict[str, torch.Tensor]:
         cdf = torch.cumsum(self.opponent_probs, 0)
@@ -93,11 +106,17 @@ class RolloutPolicy(TensorDictModuleBase):
         opponent = torch.where(episode_start, chosen, current)
         opponent_action = torch.zeros_like(action)
         first_slot = 1 + self.n_scripted
-        for index in torch.unique(opponent).tolist():
-            if 1 <= index < first_slot:
-                continue  # a scripted bot: the env acts for it
-            network = self.model if index == 0 else self.slots[index - first_slot]
-            rows = opponent == index
-            opponent_action[rows] = torch.as_tensor(sample_env_actions(network, obs[rows])).to(action.dtype)
+        network = (opponent == 0) | (opponent >= first_slot)  # the learner itself or a snapshot slot
+        present = torch.unique(opponent[network]).tolist()
+        if len(present) == 1:  # one network: its own forward
+            index = present[0]
+            model = self.model if index == 0 else self.slots[index - first_slot]
+            opponent_action[network] = torch.as_tensor(sample_env_actions(model, obs[network])).to(action.dtype)
+        elif present:  # several: one stacked forward (stacked.py), each row through its network's weights
+            which = torch.where(opponent[network] == 0, 0, opponent[network] - first_slot + 1)
+            out = self._stacked()(obs[network], which)
+            sampled = (torch.normal(*out) if self.model.action["kind"] == "box"
+                       else torch.distributions.Categorical(logits=out, validate_args=False).sample())
+            opponent_action[network] = torch.as_tensor(env_actions(self.model.action, sampled)).to(action.dtype)
         return {"opponent_id": opponent, "opponent_generation": self.opponent_generations[opponent],
                 "opponent_action": opponent_action}
