@@ -131,3 +131,21 @@ def test_the_rollout_policy_plays_each_opponent_row_with_its_own_network():
                      torch.zeros(rows))
     expected = torch.as_tensor([7, 0, 21, 42] * 3)
     assert torch.equal(out["opponent_action"], expected) and torch.equal(out["opponent_id"], opponent)
+
+
+@pytest.mark.parametrize("kind", ["discrete", "box"])
+def test_the_rollout_policy_samples_what_torch_distributions_sample_from_one_generator_state(kind):
+    action = {"kind": "discrete", "n": 90} if kind == "discrete" else {"kind": "box", "dim": 8}
+    (model,) = _models(action, 1, 87, "car_local")
+    policy = RolloutPolicy(model)
+    x = model.obs_norm(torch.randn(64, 87))
+    torch.manual_seed(2)
+    got_action, got_log_prob = policy.sample(x)
+    torch.manual_seed(2)
+    if kind == "box":
+        loc, scale = model.policy(x)
+        dist = torch.distributions.Independent(torch.distributions.Normal(loc, scale), 1)
+    else:
+        dist = torch.distributions.Categorical(logits=model.policy(x))
+    expected = dist.sample()
+    assert torch.equal(got_action, expected) and torch.equal(got_log_prob, dist.log_prob(expected))

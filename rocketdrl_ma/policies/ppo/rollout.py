@@ -125,7 +125,7 @@ class WorkerGames:
         actions = action.astype(np.int64) if self.discrete else np.clip(action, -1.0, 1.0)
         self._apply_controls(ctl_difficulty, ctl_kickstart)
         stats = self._empty_stats()
-        cpu_start = time.thread_time()  # CPU, not wall time: a busy machine must not shrink the env's capacity
+        cpu_start = time.thread_time_ns()  # CPU, not wall time: a busy machine must not shrink the env's capacity
         if self.selfplay:
             starts = np.flatnonzero(self._episode_start[::self.copy_rows])
             if len(starts):
@@ -144,7 +144,7 @@ class WorkerGames:
                 stats["match_team"][row] = result.team
         else:
             step = self.games.step(actions)
-        stats["env_cpu_s"][:] = (time.thread_time() - cpu_start) / self.rows
+        stats["env_cpu_s"][:] = (time.thread_time_ns() - cpu_start) * 1e-9 / self.rows
         self._obs = step.obs
         stats["shaping"][:] = step.shaping
         for episode in step.episodes:

@@ -17,6 +17,8 @@ parameter or a buffer, and reaches the env as keys the module writes next to ``a
 """
 from __future__ import annotations
 
+import math
+
 import torch
 from tensordict import TensorDictBase
 from tensordict.nn import TensorDictModuleBase
@@ -25,6 +27,8 @@ from torchrl.envs.utils import ExplorationType, exploration_type
 
 from .model import PPOModel, env_actions, sample_env_actions
 from .stacked import StackedPolicies
+
+HALF_LOG_TWO_PI = math.log(math.sqrt(2 * math.pi))  # Normal.log_prob's constant, computed as torch computes it
 
 
 class RolloutPolicy(TensorDictModuleBase):
@@ -71,23 +75,25 @@ class RolloutPolicy(TensorDictModuleBase):
         return out
 
     def sample(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """The learner's action and its log-probability for normalised inputs ``x``: the distributions of the
-        model's torchrl actor (``PPOModel.td_modules``, which ``ClipPPOLoss`` scores), built here without its
-        tensordict plumbing, which cost as much as the rest of a worker's decision. Greedy under torchrl's
-        deterministic exploration type."""
-        # no argument validation: the network's outputs are valid by construction, and checking them cost a
-        # fifth of a worker's policy time
+        """The learner's action and its log-probability for normalised inputs ``x``: what the distributions of the
+        model's torchrl actor (``PPOModel.td_modules``, which ``ClipPPOLoss`` scores) sample and score, written
+        out as the very operations ``torch.distributions`` runs (the same numbers from the same generator state,
+        ``tests/policies/test_worker_loop.py``) without building distribution objects, which cost as much as the
+        network's forward. Greedy under torchrl's deterministic exploration type."""
+        greedy = exploration_type() == ExplorationType.DETERMINISTIC
         if self.model.action["kind"] == "box":
             loc, scale = self.model.policy(x)
-            dist = torch.distributions.Independent(torch.distributions.Normal(loc, scale, validate_args=False), 1,
-                                                   validate_args=False)
-            greedy = loc
-        else:
-            logits = self.model.policy(x)
-            dist = torch.distributions.Categorical(logits=logits, validate_args=False)
-            greedy = logits.argmax(-1)
-        action = greedy if exploration_type() == ExplorationType.DETERMINISTIC else dist.sample()
-        return action, dist.log_prob(action)
+            action = loc if greedy else torch.normal(loc, scale)  # Normal.sample
+            # Normal.log_prob, summed over the action's dimensions (Independent)
+            log_prob = -((action - loc) ** 2) / (2 * scale ** 2) - scale.log() - HALF_LOG_TWO_PI
+            return action, log_prob.sum(-1)
+        logits = self.model.policy(x)
+        logits = logits - logits.logsumexp(dim=-1, keepdim=True)  # Categorical's normalised logits
+        if greedy:
+            action = logits.argmax(-1)
+        else:  # Categorical.sample
+            action = torch.multinomial(torch.softmax(logits, dim=-1), 1, True).T.reshape(logits.shape[:-1])
+        return action, logits.gather(-1, action.unsqueeze(-1)).squeeze(-1)
 
     def _stacked(self) -> StackedPolicies:
         """The learner's and every slot's policy stacked; rebuilt when the weights change, which they do only with
