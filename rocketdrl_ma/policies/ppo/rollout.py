@@ -1,10 +1,11 @@
-"""What one rollout worker steps: a torchrl ``EnvBase`` whose batch is the learner's rows of its env copies.
+"""What one rollout worker steps: the learner's rows of its env copies, as numpy arrays (``WorkerGames``, which the lean
+loop of ``worker_loop.py`` drives) and as a torchrl ``EnvBase`` over them (``RolloutEnv``, for torchrl's collectors).
 
 Every worker owns ``copies`` env copies (the arenas of one ``VectorEnv``: ``EnvPool``, or ``SelfPlayGames`` with
 a ``selfplay`` section), copy ``i`` of worker ``w`` being copy ``w * copies + i`` of the run and seeded
-``seed + w * copies + i``, so a copy plays the same game whatever the number of workers. torchrl's collectors
-drive it like any env: the policy writes ``action`` (and, for what the learner decides, a few more keys, see
-``rollout_policy.py``), ``_step`` plays one decision, ended copies are reset by torchrl's partial reset.
+``seed + w * copies + i``, so a copy plays the same game whatever the number of workers. A collector (the lean
+loop or torchrl's) drives it like any env: the policy writes ``action`` (and, for what the learner decides, a few
+more keys, see ``rollout_policy.py``), a step plays one decision, ended copies are reset (a partial reset).
 
 Keys besides ``observation``/``action``/``reward``/``done``/``terminated``/``truncated`` (all ``[rows]``):
 
@@ -81,6 +82,9 @@ class WorkerGames:
         self.kickstart_configured = kickstart is not None
         self.kickstart_on = self.kickstart_configured
         self.difficulty: float | None = None
+        # the clock behind env_cpu_s: the thread's CPU time, a system call each time (the lean loop swaps in a wall
+        # clock and scales a batch's figures by its CPU share, worker_loop.py)
+        self.env_clock_ns = time.thread_time_ns
         self._obs = np.zeros((self.rows,) + self.games.observation_space.shape, np.float32)
         self._episode_start = np.zeros(self.rows, bool)
         self._draw = np.zeros(self.rows, np.float32)
@@ -125,7 +129,7 @@ class WorkerGames:
         actions = action.astype(np.int64) if self.discrete else np.clip(action, -1.0, 1.0)
         self._apply_controls(ctl_difficulty, ctl_kickstart)
         stats = self._empty_stats()
-        cpu_start = time.thread_time_ns()  # CPU, not wall time: a busy machine must not shrink the env's capacity
+        cpu_start = self.env_clock_ns()  # CPU, not wall time: a busy machine must not shrink the env's capacity
         if self.selfplay:
             starts = np.flatnonzero(self._episode_start[::self.copy_rows])
             if len(starts):
@@ -144,7 +148,7 @@ class WorkerGames:
                 stats["match_team"][row] = result.team
         else:
             step = self.games.step(actions)
-        stats["env_cpu_s"][:] = (time.thread_time_ns() - cpu_start) * 1e-9 / self.rows
+        stats["env_cpu_s"][:] = (self.env_clock_ns() - cpu_start) * 1e-9 / self.rows
         self._obs = step.obs
         stats["shaping"][:] = step.shaping
         for episode in step.episodes:

@@ -22,6 +22,7 @@ found dead by the weight push (``WorkerLost``); ``Rollouts`` then rebuilds the c
 from __future__ import annotations
 
 import signal
+import time
 import traceback
 from multiprocessing import connection
 
@@ -48,6 +49,8 @@ class TrajectoryLoop:
 
     def __init__(self, games: WorkerGames, policy: RolloutPolicy):
         self.games, self.policy = games, policy
+        # the env's time per decision on the wall clock (no system call), scaled per batch by the loop's CPU share
+        games.env_clock_ns = time.perf_counter_ns
         self.current: dict[str, np.ndarray] | None = None  # the observation keys the next decision acts on
         self.buffers: dict[str, torch.Tensor] = {}
 
@@ -68,6 +71,7 @@ class TrajectoryLoop:
         if self.current is None:
             self.current = games.reset()
         version = policy.version.numpy()
+        cpu_start, wall_start = time.thread_time_ns(), time.perf_counter_ns()
         for t in range(horizon):
             current = self.current
             observation = torch.from_numpy(current["observation"])
@@ -87,6 +91,9 @@ class TrajectoryLoop:
                 else:
                     arrays[key][t] = acted[key] if key in acted else current[key]
             self.current = self._after(step)
+        # CPU, not wall time: a busy machine must not shrink the env's capacity
+        cpu_share = (time.thread_time_ns() - cpu_start) / max(time.perf_counter_ns() - wall_start, 1)
+        self._arrays[("next", "env_cpu_s")] *= min(cpu_share, 1.0)
         return self.buffers
 
     def _after(self, step: dict[str, np.ndarray]) -> dict[str, np.ndarray]:

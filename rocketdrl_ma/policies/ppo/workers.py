@@ -1,19 +1,19 @@
-"""The rollout workers of a training run, on torchrl's collectors.
+"""The rollout workers of a training run.
 
-``n_workers`` 0 steps the env copies in the trainer's own process (torchrl's ``Collector``); N >= 1 gives N
-worker processes (``MultiSyncCollector``, or ``MultiAsyncCollector`` with ``asynchronous``), each owning
-``ceil(n_envs / N)`` copies (``rollout.py``) and a copy of the ``RolloutPolicy``; ``ray`` puts the N workers
-on a Ray cluster instead (``RayCollector``). Whatever the backend, a batch comes back as one ``TensorDict``
-``[rows, T]`` (rows first, then decisions), and ``update_weights`` ships the policy (learner, opponents and
-the learner's decisions: ``rollout_policy.py``) to every worker.
+``n_workers`` 0 steps the env copies in the trainer's own process; N >= 1 gives N worker processes, each owning
+``ceil(n_envs / N)`` copies (``rollout.py``) and a copy of the ``RolloutPolicy``. Synchronous collection (the
+default) runs the lean loop of ``worker_loop.py`` (numpy and shared memory, no TensorDict per step); ``async`` keeps
+torchrl's ``MultiAsyncCollector`` and ``ray`` its ``RayCollector`` (over ``RolloutEnv``). Whatever the backend, a
+batch comes back as one ``TensorDict`` ``[rows, T]`` (rows first, then decisions), and ``update_weights`` ships the
+policy (learner, opponents and the learner's decisions: ``rollout_policy.py``) to every worker.
 
 Overlap (``WorkerPlan.overlap``, synchronous local workers): ``collect_ahead`` sends the workers on to the next
 batch as soon as one arrives, and a thread waits for it while the learner updates; the weights are pushed only
 between batches, before the workers set off, so each batch is collected with exactly the weights of one update
 before and the run is the same whatever the timing.
 
-Faults: a worker that dies (a crash, an OOM kill, ``kill -9``) makes torchrl's collector raise while it collects,
-or the weight push raise (``weight_push.py``) between batches; the batch being collected is dropped, the collector
+Faults: a worker that dies (a crash, an OOM kill, ``kill -9``) makes the collector raise while it collects, or the
+weight push raise (``WorkerLost``) between batches; the batch being collected is dropped, the collector
 is rebuilt with fresh workers, and collection goes on. A run whose workers keep dying (``MAX_RESTARTS`` in a row
 without a batch in between) stops with the error.
 """
