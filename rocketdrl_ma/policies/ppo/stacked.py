@@ -4,7 +4,7 @@ A self-play worker plays the learner itself and up to ``pool_size`` snapshots as
 costs a Python round of small matrix products each. Here the networks' weights are stacked once
 (``StackedPolicies``, rebuilt when the weights change) and every row's input goes through its network's weights in
 one ``baddbmm`` per layer, rows padded per network to the largest group. The outputs equal each network's own
-forward up to float rounding (the batched kernels sum in another order; ``tests/policies/test_stacked_opponents.py``
+forward up to float rounding (the batched kernels sum in another order; ``tests/policies/test_worker_loop.py``
 states the tolerance).
 """
 from __future__ import annotations

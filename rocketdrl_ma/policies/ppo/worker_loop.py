@@ -14,7 +14,7 @@ same calls in the same order, so one seed gives the very batch torchrl's in-proc
   buffers live in shared memory: the learner copies new weights into them between batches (never while the
   workers collect), so a weight push is a memory copy and a check that every worker is alive;
 - a batch is every worker's ``[T, rows]`` buffers, concatenated over rows and turned ``[rows, T]``; a key that
-  is a ``(\"next\", key)`` of torchrl's batch is in ``\"next\"`` here too.
+  is a ``("next", key)`` of torchrl's batch is in ``"next"`` here too.
 
 A worker that dies (a crash, ``kill -9``) ends the wait for its batch with ``EOFError`` (its pipe closes) or is
 found dead by the weight push (``WorkerLost``); ``Rollouts`` then rebuilds the collector.
