@@ -18,7 +18,7 @@ the top frames). Self-play configs run without their imitation warm start and wi
 changes the speed of a step). The load average is printed: a run at load > 1.5 is not a result.
 
 Run from the repo root: ``.venv/bin/python benchmarks/scaling.py [--configs policies/penalty_tuned.yaml]
-[--workers 1 2] [--iterations 6] [--baseline REF] [--profile DIR] [--ray]``
+[--workers 1 2] [--iterations 6] [--baseline REF] [--profile DIR] [--ray] [--min-steps N]``
 """
 from __future__ import annotations
 
@@ -142,14 +142,14 @@ def _command(args: list[str], profile: Path | None) -> list[str]:
 
 
 def cell(kind: str, config: str, workers: int, iterations: int, pythonpath: Path, ray: str | None = None,
-         profile: Path | None = None) -> dict:
+         profile: Path | None = None, min_steps: int = MIN_STEPS) -> dict:
     with tempfile.TemporaryDirectory() as out:
         env = {**os.environ, "PYTHONPATH": str(pythonpath), "RL_WARNINGS": "0"}
         if pythonpath != ROOT:  # the baseline's kernels compile once for the whole run, not once per cell
             env["NUMBA_CACHE_DIR"] = str(pythonpath / "numba_cache")
         script = Path(out) / "cell.py"  # a file, not -c: a profile names its process by the command line
         # under a main guard: the rollout workers are spawned, and a spawned process imports the main script again
-        script.write_text('if __name__ == "__main__":\n' + textwrap.indent(CELL % MIN_STEPS, "    "))
+        script.write_text('if __name__ == "__main__":\n' + textwrap.indent(CELL % min_steps, "    "))
         args = [sys.executable, str(script), kind, config, str(workers), str(iterations), out, *([ray] if ray else [])]
         proc = subprocess.run(_command(args, profile), cwd=pythonpath, env=env, capture_output=True, text=True)
         if proc.returncode != 0:
@@ -190,6 +190,8 @@ def main() -> None:
     parser.add_argument("--workers", nargs="+", type=int, default=[n for n in (1, 2, 4, 8) if n <= cores])
     parser.add_argument("--iterations", type=int, default=6, help="training iterations (buffers) per cell")
     parser.add_argument("--env-seconds", type=float, default=15.0, help="how long the env alone steps")
+    parser.add_argument("--min-steps", type=int, default=MIN_STEPS, help="learner rows a training cell runs at least "
+                        "(a smoke run of the benchmark itself: --min-steps 1 --iterations 1 --env-seconds 1)")
     parser.add_argument("--baseline", default=None, help="git ref of the trainer to compare with, in the same run")
     parser.add_argument("--profile", type=Path, default=None, help="record every training cell with py-spy here")
     parser.add_argument("--ray", action="store_true", help="also train on a local Ray cluster of N nodes")
@@ -224,15 +226,18 @@ def main() -> None:
                 if n == last:
                     r[f"env {n}"] = env_cell(config, n, args.env_seconds)["rate"]
                     r[f"collect {n}"] = cell("collect", config, n, args.iterations, ROOT,
-                                             profile=profiled("collect", n))["rate"]
-                trained = cell("train", config, n, args.iterations, ROOT, profile=profiled("train", n))
+                                             profile=profiled("collect", n), min_steps=args.min_steps)["rate"]
+                trained = cell("train", config, n, args.iterations, ROOT, profile=profiled("train", n),
+                               min_steps=args.min_steps)
                 r[f"train {n}"], r[f"learner {n}"] = trained["rate"], trained["learner"]
                 if before:
-                    r[f"before {n}"] = cell("before", config, n, args.iterations, before)["rate"]
+                    r[f"before {n}"] = cell("before", config, n, args.iterations, before,
+                                            min_steps=args.min_steps)["rate"]
             if args.ray:
                 cluster = LocalRayCluster(args.ray_port, nodes=last)
                 try:
-                    r["ray"] = cell("train", config, last, args.iterations, ROOT, cluster.address)["rate"]
+                    r["ray"] = cell("train", config, last, args.iterations, ROOT, cluster.address,
+                                    min_steps=args.min_steps)["rate"]
                 finally:
                     cluster.stop()
             row = [config]

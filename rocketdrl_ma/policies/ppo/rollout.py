@@ -1,10 +1,11 @@
-"""What one rollout worker steps: a torchrl ``EnvBase`` whose batch is the learner's rows of its env copies.
+"""What one rollout worker steps: the learner's rows of its env copies, as numpy arrays (``WorkerGames``, which the lean
+loop of ``worker_loop.py`` drives) and as a torchrl ``EnvBase`` over them (``RolloutEnv``, for torchrl's collectors).
 
 Every worker owns ``copies`` env copies (the arenas of one ``VectorEnv``: ``EnvPool``, or ``SelfPlayGames`` with
 a ``selfplay`` section), copy ``i`` of worker ``w`` being copy ``w * copies + i`` of the run and seeded
-``seed + w * copies + i``, so a copy plays the same game whatever the number of workers. torchrl's collectors
-drive it like any env: the policy writes ``action`` (and, for what the learner decides, a few more keys, see
-``rollout_policy.py``), ``_step`` plays one decision, ended copies are reset by torchrl's partial reset.
+``seed + w * copies + i``, so a copy plays the same game whatever the number of workers. A collector (the lean
+loop or torchrl's) drives it like any env: the policy writes ``action`` (and, for what the learner decides, a few
+more keys, see ``rollout_policy.py``), a step plays one decision, ended copies are reset (a partial reset).
 
 Keys besides ``observation``/``action``/``reward``/``done``/``terminated``/``truncated`` (all ``[rows]``):
 
@@ -54,7 +55,11 @@ def _action_spec(space: spaces.Space, rows: int):
     return Unbounded(shape=(rows,) + space.shape, dtype=torch.float32)  # raw Gaussian samples; clipped here
 
 
-class RolloutEnv(EnvBase):
+class WorkerGames:
+    """The games of one rollout worker as numpy arrays: ``reset`` and ``step`` return the keys of the module
+    docstring (``observation`` and the rest, ``[rows, ...]``), the torchrl env below and the lean worker loop
+    (``worker_loop.py``) both drive it."""
+
     def __init__(self, cfg: TrainConfig, copies: int, worker: int = 0):
         self.cfg, self.worker = cfg, worker
         first_copy = worker * copies
@@ -72,17 +77,156 @@ class RolloutEnv(EnvBase):
             self.copy_rows = len(self.games.agents)
             self.copy_teams = [agent.rpartition("_")[0] for agent in self.games.agents]  # a copy's rows: every car
         self.copies, self.rows = copies, self.games.n_rows
-        super().__init__(batch_size=torch.Size([self.rows]), device="cpu")
         self.rng = np.random.default_rng([cfg.seed, worker])
         self.discrete = isinstance(self.games.action_space, spaces.Discrete)
         self.kickstart_configured = kickstart is not None
         self.kickstart_on = self.kickstart_configured
         self.difficulty: float | None = None
-        self._build_specs()
+        # the clock behind env_cpu_s: the thread's CPU time, a system call each time (the lean loop swaps in a wall
+        # clock and scales a batch's figures by its CPU share, worker_loop.py)
+        self.env_clock_ns = time.thread_time_ns
         self._obs = np.zeros((self.rows,) + self.games.observation_space.shape, np.float32)
         self._episode_start = np.zeros(self.rows, bool)
         self._draw = np.zeros(self.rows, np.float32)
         self._started = False
+
+    @property
+    def observation_space(self) -> spaces.Box:
+        return self.games.observation_space
+
+    @property
+    def action_space(self) -> spaces.Space:
+        return self.games.action_space
+
+    def _begin(self, rows: np.ndarray) -> None:
+        """Rows whose episode has just begun: the policy picks their opponent from one draw per copy."""
+        self._episode_start[:] = rows
+        if self.selfplay:
+            per_copy = self.rng.random(self.copies).astype(np.float32)
+            self._draw[:] = np.repeat(per_copy, self.copy_rows)
+
+    def reset(self, copies: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """Every copy's first observation (``copies`` None, or before the first reset), else a new episode for the
+        copies flagged in ``copies`` [copies] (the other rows keep their observation)."""
+        if copies is None or not self._started:
+            self._obs = self.games.reset()
+            self._started = True
+            self._begin(np.ones(self.rows, bool))
+        else:
+            self._obs = self.games.reset_copies(copies, self._obs)
+            self._begin(np.repeat(copies, self.copy_rows))
+        out = self._observation(self._empty_stats())
+        false = np.zeros((self.rows, 1), bool)
+        out.update({"done": false, "terminated": false.copy(), "truncated": false.copy()})
+        return out
+
+    def step(self, action: np.ndarray, opponent_action: np.ndarray | None = None,
+             opponent_id: np.ndarray | None = None, opponent_generation: np.ndarray | None = None,
+             ctl_difficulty: float = float("nan"), ctl_kickstart: bool | None = None) -> dict[str, np.ndarray]:
+        """One decision of every copy: ``action`` [rows, ...] the policy's raw samples (clipped here), in self-play
+        the network opponents' actions and the opponent (id, generation) every row plays; the learner's
+        controls (``ctl_*``: NaN / None leave them)."""
+        actions = action.astype(np.int64) if self.discrete else np.clip(action, -1.0, 1.0)
+        self._apply_controls(ctl_difficulty, ctl_kickstart)
+        stats = self._empty_stats()
+        cpu_start = self.env_clock_ns()  # CPU, not wall time: a busy machine must not shrink the env's capacity
+        if self.selfplay:
+            starts = np.flatnonzero(self._episode_start[::self.copy_rows])
+            if len(starts):
+                first_rows = starts * self.copy_rows
+                self.games.begin_episodes(starts, opponent_id[first_rows], opponent_generation[first_rows])
+            opponent = opponent_action.astype(np.int64) if self.discrete else np.clip(opponent_action, -1.0, 1.0)
+            step, results, goals = self.games.step(actions, opponent)
+            first = np.arange(self.copies) * self.copy_rows
+            stats["goals_for"][first], stats["goals_against"][first] = goals[:, 0], goals[:, 1]
+            for result in results:
+                row = result.copy * self.copy_rows
+                stats["match_end"][row] = True
+                stats["match_opponent"][row] = result.opponent
+                stats["match_generation"][row] = result.generation
+                stats["match_points"][row] = result.points
+                stats["match_team"][row] = result.team
+        else:
+            step = self.games.step(actions)
+        stats["env_cpu_s"][:] = (self.env_clock_ns() - cpu_start) * 1e-9 / self.rows
+        self._obs = step.obs
+        stats["shaping"][:] = step.shaping
+        for episode in step.episodes:
+            rows = np.arange(episode.copy * self.copy_rows, (episode.copy + 1) * self.copy_rows)
+            row = rows[np.flatnonzero(~stats["episode_end"][rows])[0]]  # one row per agent of the copy
+            stats["episode_end"][row] = True
+            stats["episode_return"][row] = episode.agent_return
+            stats["episode_length"][row] = episode.length
+            stats["episode_success"][row] = episode.success
+        self._begin(np.zeros(self.rows, bool))
+        out = self._observation(stats)
+        term = np.asarray(step.terminated, bool)[:, None]
+        trunc = np.asarray(step.truncated, bool)[:, None]
+        out.update({"reward": np.asarray(step.reward, np.float32)[:, None], "done": term | trunc,
+                    "terminated": term, "truncated": trunc})
+        return out
+
+    def _apply_controls(self, ctl_difficulty: float, ctl_kickstart: bool | None) -> None:
+        if not math.isnan(ctl_difficulty) and ctl_difficulty != self.difficulty:
+            self.set_difficulty(ctl_difficulty)
+        if ctl_kickstart is not None:
+            self.kickstart_on = self.kickstart_configured and ctl_kickstart
+
+    def set_difficulty(self, level: float) -> None:
+        """A minigame's difficulty in [0, 1], from each copy's next round."""
+        if self.selfplay:
+            raise ValueError("curriculum: self-play trains on a match, which has no difficulty to set")
+        self.games.set_difficulty(level)
+        self.difficulty = level
+
+    def _empty_stats(self) -> dict[str, np.ndarray]:
+        r = self.rows
+        stats = {"shaping": np.zeros(r, np.float32), "env_cpu_s": np.zeros(r, np.float32),
+                 "episode_end": np.zeros(r, bool), "episode_return": np.zeros(r, np.float32),
+                 "episode_length": np.zeros(r, np.int64), "episode_success": np.zeros(r, bool)}
+        if self.selfplay:
+            stats.update({"match_end": np.zeros(r, bool), "match_opponent": np.zeros(r, np.int64),
+                          "match_generation": np.zeros(r, np.int64), "match_points": np.zeros(r, np.float32),
+                          "match_team": np.zeros((r, len(TEAM_LOG_METRICS)), np.float32),
+                          "goals_for": np.zeros(r, np.int64), "goals_against": np.zeros(r, np.int64)})
+        return stats
+
+    def _observation(self, stats: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        out = {"observation": np.asarray(self._obs, np.float32), **stats}
+        if self.kickstart_configured:
+            labels = self.games.teacher_actions() if self.kickstart_on else None
+            if labels is None:
+                shape = (self.rows,) if self.discrete else (self.rows,) + self.games.action_space.shape
+                labels = np.zeros(shape, np.int64 if self.discrete else np.float32)
+            out["teacher_action"] = labels
+        if self.selfplay:
+            out["opponent_observation"] = np.asarray(self.games.opponent_obs(), np.float32)
+            out["episode_start"] = self._episode_start.copy()
+            out["opponent_id"] = np.repeat(self.games.opponent, self.copy_rows).astype(np.int64)
+            out["opponent_draw"] = self._draw.copy()
+        return out
+
+    def close(self) -> None:
+        if self.games is not None:
+            self.games.close()
+            self.games = None
+
+
+class RolloutEnv(EnvBase):
+    """``WorkerGames`` as a torchrl env (for torchrl's collectors: ``async`` and Ray workers)."""
+
+    def __init__(self, cfg: TrainConfig, copies: int, worker: int = 0):
+        self.core = WorkerGames(cfg, copies, worker)
+        self.cfg, self.worker = cfg, worker
+        self.copies, self.rows, self.copy_rows = copies, self.core.rows, self.core.copy_rows
+        self.copy_teams, self.selfplay, self.discrete = self.core.copy_teams, self.core.selfplay, self.core.discrete
+        self.kickstart_configured = self.core.kickstart_configured
+        super().__init__(batch_size=torch.Size([self.rows]), device="cpu")
+        self._build_specs()
+
+    @property
+    def games(self):
+        return None if self.core is None else self.core.games
 
     # ------------------------------------------------------------------ specs
     def _build_specs(self) -> None:
@@ -117,130 +261,43 @@ class RolloutEnv(EnvBase):
 
     @property
     def observation_space(self) -> spaces.Box:
-        return self.games.observation_space
+        return self.core.observation_space
 
     @property
     def action_space(self) -> spaces.Space:
-        return self.games.action_space
+        return self.core.action_space
 
     # ------------------------------------------------------------------ torchrl
     def _set_seed(self, seed: int | None) -> None:
         """Copies are seeded from the training config (copy ``i``: ``seed + i``), not by the collector."""
 
-    def _begin(self, rows: np.ndarray) -> None:
-        """Rows whose episode has just begun: the policy picks their opponent from one draw per copy."""
-        self._episode_start[:] = rows
-        if self.selfplay:
-            per_copy = self.rng.random(self.copies).astype(np.float32)
-            self._draw[:] = np.repeat(per_copy, self.copy_rows)
-
     def _reset(self, tensordict: TensorDictBase | None = None, **kwargs: Any) -> TensorDictBase:
         mask = None
-        if tensordict is not None and "_reset" in tensordict.keys() and self._started:
+        if tensordict is not None and "_reset" in tensordict.keys():
             mask = tensordict.get("_reset").reshape(self.copies, self.copy_rows).any(-1).cpu().numpy()
-        if mask is None:
-            self._obs = self.games.reset()
-            self._started = True
-            self._begin(np.ones(self.rows, bool))
-        else:
-            self._obs = self.games.reset_copies(mask, self._obs)
-            self._begin(np.repeat(mask, self.copy_rows))
-        out = self._observation(self._empty_stats())
-        false = torch.zeros((self.rows, 1), dtype=torch.bool)
-        out.update({"done": false, "terminated": false.clone(), "truncated": false.clone()})
-        return out
+        return self._tensordict(self.core.reset(mask))
 
     def _step(self, tensordict: TensorDictBase) -> TensorDictBase:
-        action = tensordict.get("action").detach()
-        actions = action.numpy().astype(np.int64) if self.discrete else action.clamp(-1.0, 1.0).numpy()
-        self._apply_controls(tensordict)
-        stats = self._empty_stats()
-        cpu_start = time.thread_time()  # CPU, not wall time: a busy machine must not shrink the env's capacity
+        keys = tensordict.keys()
+        difficulty = float(tensordict.get("ctl_difficulty")[0]) if "ctl_difficulty" in keys else float("nan")
+        kickstart = bool(tensordict.get("ctl_kickstart")[0]) if "ctl_kickstart" in keys else None
+        opponent = {}
         if self.selfplay:
-            starts = np.flatnonzero(self._episode_start[::self.copy_rows])
-            if len(starts):
-                first_rows = starts * self.copy_rows
-                self.games.begin_episodes(starts, tensordict.get("opponent_id")[first_rows].numpy(),
-                                          tensordict.get("opponent_generation")[first_rows].numpy())
-            opponent = tensordict.get("opponent_action").detach()
-            opponent = opponent.numpy().astype(np.int64) if self.discrete else opponent.clamp(-1.0, 1.0).numpy()
-            step, results, goals = self.games.step(actions, opponent)
-            first = np.arange(self.copies) * self.copy_rows
-            stats["goals_for"][first], stats["goals_against"][first] = goals[:, 0], goals[:, 1]
-            for result in results:
-                row = result.copy * self.copy_rows
-                stats["match_end"][row] = True
-                stats["match_opponent"][row] = result.opponent
-                stats["match_generation"][row] = result.generation
-                stats["match_points"][row] = result.points
-                stats["match_team"][row] = result.team
-        else:
-            step = self.games.step(actions)
-        stats["env_cpu_s"][:] = (time.thread_time() - cpu_start) / self.rows
-        self._obs = step.obs
-        stats["shaping"][:] = step.shaping
-        for episode in step.episodes:
-            rows = np.arange(episode.copy * self.copy_rows, (episode.copy + 1) * self.copy_rows)
-            row = rows[np.flatnonzero(~stats["episode_end"][rows])[0]]  # one row per agent of the copy
-            stats["episode_end"][row] = True
-            stats["episode_return"][row] = episode.agent_return
-            stats["episode_length"][row] = episode.length
-            stats["episode_success"][row] = episode.success
-        self._begin(np.zeros(self.rows, bool))
-        out = self._observation(stats)
-        term = torch.as_tensor(step.terminated).unsqueeze(-1)
-        trunc = torch.as_tensor(step.truncated).unsqueeze(-1)
-        out.update({"reward": torch.as_tensor(step.reward, dtype=torch.float32).unsqueeze(-1),
-                    "done": term | trunc, "terminated": term, "truncated": trunc})
-        return out
+            opponent = {name: tensordict.get(name).detach().numpy()
+                        for name in ("opponent_action", "opponent_id", "opponent_generation")}
+        return self._tensordict(self.core.step(tensordict.get("action").detach().numpy(), ctl_difficulty=difficulty,
+                                               ctl_kickstart=kickstart, **opponent))
 
-    def _apply_controls(self, tensordict: TensorDictBase) -> None:
-        if "ctl_difficulty" in tensordict.keys():
-            level = float(tensordict.get("ctl_difficulty")[0])
-            if not math.isnan(level) and level != self.difficulty:
-                self.set_difficulty(level)
-        if "ctl_kickstart" in tensordict.keys():
-            self.kickstart_on = self.kickstart_configured and bool(tensordict.get("ctl_kickstart")[0])
+    def _tensordict(self, arrays: dict[str, np.ndarray]) -> TensorDict:
+        return TensorDict({key: torch.as_tensor(value) for key, value in arrays.items()}, batch_size=self.batch_size)
 
     def set_difficulty(self, level: float) -> None:
-        """A minigame's difficulty in [0, 1], from each copy's next round."""
-        if self.selfplay:
-            raise ValueError("curriculum: self-play trains on a match, which has no difficulty to set")
-        self.games.set_difficulty(level)
-        self.difficulty = level
-
-    def _empty_stats(self) -> dict[str, np.ndarray]:
-        r = self.rows
-        stats = {"shaping": np.zeros(r, np.float32), "env_cpu_s": np.zeros(r, np.float32),
-                 "episode_end": np.zeros(r, bool), "episode_return": np.zeros(r, np.float32),
-                 "episode_length": np.zeros(r, np.int64), "episode_success": np.zeros(r, bool)}
-        if self.selfplay:
-            stats.update({"match_end": np.zeros(r, bool), "match_opponent": np.zeros(r, np.int64),
-                          "match_generation": np.zeros(r, np.int64), "match_points": np.zeros(r, np.float32),
-                          "match_team": np.zeros((r, len(TEAM_LOG_METRICS)), np.float32),
-                          "goals_for": np.zeros(r, np.int64), "goals_against": np.zeros(r, np.int64)})
-        return stats
-
-    def _observation(self, stats: dict[str, np.ndarray]) -> TensorDict:
-        out = {"observation": torch.as_tensor(self._obs, dtype=torch.float32),
-               **{key: torch.as_tensor(value) for key, value in stats.items()}}
-        if self.kickstart_configured:
-            labels = self.games.teacher_actions() if self.kickstart_on else None
-            if labels is None:
-                shape = (self.rows,) if self.discrete else (self.rows,) + self.games.action_space.shape
-                labels = np.zeros(shape, np.int64 if self.discrete else np.float32)
-            out["teacher_action"] = torch.as_tensor(labels)
-        if self.selfplay:
-            out["opponent_observation"] = torch.as_tensor(self.games.opponent_obs(), dtype=torch.float32)
-            out["episode_start"] = torch.as_tensor(self._episode_start.copy())
-            out["opponent_id"] = torch.as_tensor(np.repeat(self.games.opponent, self.copy_rows).astype(np.int64))
-            out["opponent_draw"] = torch.as_tensor(self._draw.copy())
-        return TensorDict(out, batch_size=self.batch_size)
+        self.core.set_difficulty(level)
 
     def close(self, *, raise_if_closed: bool = True) -> None:
-        if getattr(self, "games", None) is not None:
-            self.games.close()
-            self.games = None
+        if getattr(self, "core", None) is not None:
+            self.core.close()
+            self.core = None
         super().close(raise_if_closed=raise_if_closed)
 
 

@@ -1,19 +1,19 @@
-"""The rollout workers of a training run, on torchrl's collectors.
+"""The rollout workers of a training run.
 
-``n_workers`` 0 steps the env copies in the trainer's own process (torchrl's ``Collector``); N >= 1 gives N
-worker processes (``MultiSyncCollector``, or ``MultiAsyncCollector`` with ``asynchronous``), each owning
-``ceil(n_envs / N)`` copies (``rollout.py``) and a copy of the ``RolloutPolicy``; ``ray`` puts the N workers
-on a Ray cluster instead (``RayCollector``). Whatever the backend, a batch comes back as one ``TensorDict``
-``[rows, T]`` (rows first, then decisions), and ``update_weights`` ships the policy (learner, opponents and
-the learner's decisions: ``rollout_policy.py``) to every worker.
+``n_workers`` 0 steps the env copies in the trainer's own process; N >= 1 gives N worker processes, each owning
+``ceil(n_envs / N)`` copies (``rollout.py``) and a copy of the ``RolloutPolicy``. Synchronous collection (the
+default) runs the lean loop of ``worker_loop.py`` (numpy and shared memory, no TensorDict per step); ``async`` keeps
+torchrl's ``MultiAsyncCollector`` and ``ray`` its ``RayCollector`` (over ``RolloutEnv``). Whatever the backend, a
+batch comes back as one ``TensorDict`` ``[rows, T]`` (rows first, then decisions), and ``update_weights`` ships the
+policy (learner, opponents and the learner's decisions: ``rollout_policy.py``) to every worker.
 
 Overlap (``WorkerPlan.overlap``, synchronous local workers): ``collect_ahead`` sends the workers on to the next
 batch as soon as one arrives, and a thread waits for it while the learner updates; the weights are pushed only
 between batches, before the workers set off, so each batch is collected with exactly the weights of one update
 before and the run is the same whatever the timing.
 
-Faults: a worker that dies (a crash, an OOM kill, ``kill -9``) makes torchrl's collector raise while it collects,
-or the weight push raise (``weight_push.py``) between batches; the batch being collected is dropped, the collector
+Faults: a worker that dies (a crash, an OOM kill, ``kill -9``) makes the collector raise while it collects, or the
+weight push raise (``WorkerLost``) between batches; the batch being collected is dropped, the collector
 is rebuilt with fresh workers, and collection goes on. A run whose workers keep dying (``MAX_RESTARTS`` in a row
 without a batch in between) stops with the error.
 """
@@ -32,6 +32,7 @@ from tensordict import TensorDictBase
 from .config import TrainConfig
 from .rollout import RolloutEnvFactory, worker_copies
 from .rollout_policy import RolloutPolicy
+from .worker_loop import LeanCollector
 
 log = logging.getLogger(__name__)
 MAX_RESTARTS = 5
@@ -103,24 +104,21 @@ class Rollouts:
         return [RolloutEnvFactory(self.cfg, self.copies, w, seed_torch=in_worker) for w in range(self.plan.processes)]
 
     def _build(self):
-        from torchrl.collectors import Collector, MultiAsyncCollector, MultiSyncCollector
+        from torchrl.collectors import Collector, MultiAsyncCollector
 
         from .weight_push import WatchedSharedMemPush
 
         per_worker = self.rows_per_worker * self.horizon
         if self.plan.ray is not None:
             return self._build_ray(per_worker)
+        if not self.plan.asynchronous:  # the lean loop: torchrl's collector cost a third of a Penalty worker
+            return LeanCollector(self.cfg, self.acting, self.plan.n_workers, self.copies, self.horizon)
         if self.plan.n_workers == 0:
             return Collector(self._factories()[0](), self.acting, frames_per_batch=per_worker, total_frames=-1,
                              auto_register_policy_transforms=False)
         push = WatchedSharedMemPush()
-        if self.plan.asynchronous:
-            collector = MultiAsyncCollector(self._factories(), self.acting, frames_per_batch=per_worker,
-                                            total_frames=-1, weight_sync_schemes={"policy": push})
-        else:
-            collector = MultiSyncCollector(self._factories(), self.acting,
-                                           frames_per_batch=per_worker * self.plan.processes, total_frames=-1,
-                                           cat_results=0, weight_sync_schemes={"policy": push})
+        collector = MultiAsyncCollector(self._factories(), self.acting, frames_per_batch=per_worker,
+                                        total_frames=-1, weight_sync_schemes={"policy": push})
         push.watch(collector.procs)
         return collector
 

@@ -85,11 +85,17 @@ class SelfPlayGames:
 
     def learner_obs(self) -> np.ndarray:
         """[rows, obs_dim]: every learner car's observation."""
-        return np.concatenate([self._obs[i, self.team_columns[self.learner_team[i]]] for i in range(len(self.envs))])
+        return self._team_obs(learner=True)
 
     def opponent_obs(self) -> np.ndarray:
         """[rows, obs_dim]: the opponent cars' observations, row ``r`` the opponent paired with learner row ``r``."""
-        return np.concatenate([self._obs[i, self.team_columns[self.opponent_team(i)]] for i in range(len(self.envs))])
+        return self._team_obs(learner=False)
+
+    def _team_obs(self, learner: bool) -> np.ndarray:
+        # one gather for every copy: each copy's columns of the learner's (or the opponent's) team
+        orange = np.fromiter((team == "orange" for team in self.learner_team), bool, len(self.envs)) == learner
+        columns = np.where(orange[:, None], self.team_columns["orange"], self.team_columns["blue"])
+        return self._obs[np.arange(len(self.envs))[:, None], columns].reshape(self.n_rows, -1)
 
     def _start_episode(self, i: int) -> None:
         self._episodes[i] += 1
