@@ -130,12 +130,13 @@ class HumanSeat(Bot):
         """The page's newest controls: answered at each decision and sent at once."""
         vector = check_controls(values)
         join = self.join_info
+        # put under the lock: the bot's answer to a newer decision cannot overtake it (the server would drop this
+        # one as late)
         with self._lock:
             changed = not np.array_equal(vector, self._controls)
             self._controls = vector
-            decision = self._decision
-        if changed and join is not None and self._publisher is not None and not self._left.is_set():
-            self._publisher.put(action_message(join.secret, join.match, join.slot, decision, vector))
+            if changed and join is not None and self._publisher is not None and not self._left.is_set():
+                self._publisher.put(action_message(join.secret, join.match, join.slot, self._decision, vector))
 
     def leave(self) -> None:
         self._left.set()
