@@ -178,7 +178,9 @@ def main() -> None:
           f"{np.percentile(latencies_ms - arrived_ms, 50):.0f} / {np.percentile(latencies_ms - arrived_ms, 95):.0f} ms")
     print(f"page: median {np.median(fps_readings):.1f} fps (min {min(fps_readings):.1f}; each over the 2 s before a "
           f"sample), {stats['statesPerS']:.1f} states/s, page loop {stats['loopMs']:.2f} ms/frame, drawing at "
-          f"pixel ratio {stats['pixelRatio']:.2f} at the end (the page draws fewer pixels below 28 fps)")
+          f"pixel ratio {stats['pixelRatio']:.2f} at the end (the page draws fewer pixels below 28 fps); the page "
+          f"busy after each frame: median {stats['busyAfterFrameMs'] or 0:.1f} ms over its last 120 frames (key "
+          f"events and states wait meanwhile)")
     if probe_lines is not None:
         print_legs(answered, inputs, sorted(arrivals.items()), probe_lines)
         for s in missed:

@@ -11,7 +11,7 @@ const $ = (id) => document.getElementById(id);
 const SHARP = new URLSearchParams(location.search).has("sharp");
 const view = new View($("view"));
 const timeline = new Timeline();
-const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
+const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [], busyMs: [] };
 let boostPanels = [];
 let socket = null, roster = null, source = null, lastList = null, status = null, hudHidden = false;
 const controls = new Controls();
@@ -601,6 +601,15 @@ window.addEventListener("hashchange", () => {
 
 // ------------------------------------------------------------------------------------------- loop
 let last = performance.now() / 1000, shown = null;
+// How long the page stays busy after each frame (a software compositor takes the canvas synchronously): a message
+// posted as the frame is drawn runs once the page is free again; key presses and states wait as long.
+const afterFrame = new MessageChannel();
+let afterFrameFrom = null;
+afterFrame.port1.onmessage = () => {
+  stats.busyMs.push(performance.now() - afterFrameFrom);
+  if (stats.busyMs.length > 120) stats.busyMs.shift();
+  afterFrameFrom = null;
+};
 function loop() {
   const now = performance.now() / 1000;
   const dt = Math.min(now - last, 0.25);
@@ -618,6 +627,7 @@ function loop() {
   stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
   stats.renders.push(now);
   while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
+  if (afterFrameFrom === null) { afterFrameFrom = performance.now(); afterFrame.port2.postMessage(0); }
   if (!SHARP && now - (stats.adaptedAt || 0) > 2) { // every 2 s, from the frame rate of those 2 s
     stats.adaptedAt = now;
     if (stats.renders.length > 2 && now - stats.renders[0] > 1.9) view.adaptResolution(rate(stats.renders));
@@ -625,6 +635,8 @@ function loop() {
   while (stats.arrivals.length && stats.arrivals[0] < now - 2) stats.arrivals.shift();
   requestAnimationFrame(loop);
 }
+
+function median(values) { return [...values].sort((a, b) => a - b)[Math.floor(values.length / 2)]; }
 
 function wall(ms) { return ms === null ? null : performance.timeOrigin + ms; }
 
@@ -672,6 +684,7 @@ window.__view = {
   roster: () => roster,
   stats: () => ({ fps: rate(stats.renders), statesPerS: rate(stats.arrivals), frames: stats.frames,
     bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs,
+    busyAfterFrameMs: stats.busyMs.length ? median(stats.busyMs) : null,
     pixelRatio: view.renderer.getPixelRatio() }),
 };
 
