@@ -2,19 +2,25 @@
 
 A real `rocketdrl-ma serve` and `rocketdrl-ma web --play` on loopback; Debian's chromium (WebGL through
 SwiftShader when there is no GPU) at 1280x720 creates a real-time 4v4 against scripted ball-chasers and plays
-blue_0. Each sample: with the car on its wheels, Playwright presses the jump key; the page notes the key
+blue_0. Each sample: with the car drawn on its wheels, not demolished and no kickoff countdown holding the cars
+(a press could get no response then), Playwright presses the jump key for 0.15 s; the page notes the key
 event's time and, at every animation frame, whether the car it draws has left the ground (5 uu above where
 it stood). The latency is the time from the key event to the first frame that draws the car off the ground (read
 just after the page's own frame callback has issued the drawing):
 the page's websocket, the page server's seat, Zenoh, the server's next 120 Hz tick, the physics' first ticks of
 the jump, the next state the real-time match publishes (60 a second), Zenoh, the page server (which sends a
-player's page each state as it arrives, up to 60 a second), the websocket and the page's next frame (a player's
-own match is drawn at its newest state, with no jitter buffer). Between samples the car lands and settles. fps:
-the page's frames per second over the 2 s before each sample, the 4v4 live the whole time. The machine's load
-average is printed before and after: figures taken beside other jobs are "loaded" figures.
+player's page each state as it arrives), the websocket and the page's next frame (a player's own match is drawn
+at its newest state, with no jitter buffer). Between samples the car lands and settles. fps: the page's frames
+per second over the 2 s before each sample, the 4v4 live the whole time. The machine's load average is printed
+before and after: figures taken beside other jobs are "loaded" figures. A press with no response within 3 s is
+counted and described (the kickoff and the car's flags when it was pressed).
+
+``--legs`` runs both servers under ``benchmarks/web_latency_probe.py`` (timestamps at each hop, on the wall
+clock the page's ``performance.timeOrigin + performance.now()`` shares) and prints each leg of every answered
+sample's path, and how far each unanswered press got.
 
 Run from the repo root (after ``make web-deps``; ``rocketdrl-ma warmup`` first, or the first match compiles
-its kernels): ``nice -n 10 .venv/bin/python benchmarks/web_latency.py`` (``--samples N``, default 60).
+its kernels): ``.venv/bin/python benchmarks/web_latency.py --samples 30`` (default 60; ``--legs``).
 """
 from __future__ import annotations
 
