@@ -136,7 +136,7 @@ def main() -> None:
                                        timeout=300_000)
                 index = page.evaluate("window.__view.roster().agents").index(page.evaluate("window.__view.seat().slot"))
                 flags = {"onGround": FLAG_ON_GROUND, "demoed": FLAG_DEMOED}
-                samples, fps_readings, arrivals, started = [], [], {}, time.monotonic()
+                samples, fps_readings, arrivals, interrupted, started = [], [], {}, 0, time.monotonic()
                 while len(samples) < args.samples:
                     page.wait_for_function(f"({READY})({json.dumps([index, flags])})", timeout=30_000)
                     time.sleep(0.3)  # settled on its wheels
@@ -148,7 +148,11 @@ def main() -> None:
                     page.keyboard.down("Space")
                     time.sleep(0.15)
                     page.keyboard.up("Space")
-                    samples.append(page.evaluate("window.__latencySample"))
+                    sample = page.evaluate("window.__latencySample")
+                    if sample["drawn"] is None and sample["kickoffAtPress"]:
+                        interrupted += 1  # a goal came between the check and the press: the cars are held
+                    else:
+                        samples.append(sample)
                     fps_readings.append(page.evaluate("window.__view.stats().fps"))
                     arrivals.update(page.evaluate("window.__view.frameArrivals()"))
                     time.sleep(1.2)  # lands
@@ -170,7 +174,8 @@ def main() -> None:
         return
     p50, p95, p99 = np.percentile(latencies_ms, [50, 95, 99])
     print(f"key press to the car's response drawn, live 4v4 at {VIEWPORT['width']}x{VIEWPORT['height']}, "
-          f"{len(latencies_ms)} samples ({len(missed)} without a response in {GIVE_UP_MS / 1000:g} s) over "
+          f"{len(latencies_ms)} samples ({len(missed)} without a response in {GIVE_UP_MS / 1000:g} s; "
+          f"{interrupted} more pressed as a kickoff countdown began, left out) over "
           f"{time.monotonic() - started:.0f} s: p50 {p50:.0f} ms, p95 {p95:.0f} ms, p99 {p99:.0f} ms, "
           f"max {latencies_ms.max():.0f} ms")
     for s in missed:
@@ -257,10 +262,12 @@ def trace_miss(sample: dict, inputs: list[dict], probe: dict) -> str:
     actions = [(round((r["at"] - pressed_s) * 1000), r["jump"], r.get("acted"), r.get("decision"))
                for r in window(serve.get("action_rx", []), "at")]
     jumps = [(round((r["t"] - pressed_s) * 1000), r["tick"]) for r in window(serve.get("tick_jump", []), "t")]
-    top = max((r["z"] for r in window(serve.get("state_pub", []), "t")), default=None)
+    published = window(serve.get("state_pub", []), "t")
+    top = max((r["z"] for r in published), default=None)
+    held = any(r.get("kickoff") for r in published)
     return (f"inputs (n, jump, ms) {sent}; seat puts (ms, jump) {puts}; match server actions (ms, jump, acted, "
             f"decision) {actions}; jump ticks (ms, tick) {jumps}; highest z published {top} (stood at "
-            f"{sample['standZ']:.1f})")
+            f"{sample['standZ']:.1f}); a kickoff countdown in the states published meanwhile: {held}")
 
 
 def print_legs(answered: list[dict], inputs: list[dict], arrivals: list, probe: dict) -> None:

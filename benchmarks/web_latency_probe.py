@@ -60,7 +60,7 @@ def probe_match_server(log: ProbeLog) -> None:
         publish_state(self, state, common, state_bytes)
         car = state.cars.get(SLOT)
         if car is not None:
-            log.add("state_pub", tick=int(state.tick), z=float(car.pos[2]))
+            log.add("state_pub", tick=int(state.tick), z=float(car.pos[2]), kickoff=bool(state.kickoff_pending))
 
     def probed_play(self, controls, actions=None, observe=True):
         mine = controls.get(SLOT)
