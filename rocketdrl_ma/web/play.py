@@ -73,8 +73,11 @@ class HumanSeat(Bot):
 
     # ------------------------------------------------------------------ the bot's side (its own thread)
     def on_join(self, join: JoinInfo) -> None:
-        # a publisher of our own on the slot's action key: the page's changes go out between decisions
-        self._publisher = self.session.declare_publisher(join.keys["act"], express=True)
+        # a publisher of our own on the slot's action key: the page's changes go out between decisions; rare, and
+        # each one counts (a jump's press), so one waits for a full queue rather than being dropped
+        import zenoh
+        self._publisher = self.session.declare_publisher(join.keys["act"], express=True,
+                                                         congestion_control=zenoh.CongestionControl.BLOCK)
         self.join_info = join
         self._joined.set()
 
