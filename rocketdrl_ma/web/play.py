@@ -97,6 +97,7 @@ class HumanSeat(Bot):
         except SeatLeft:
             self._leave_lobby()
         except (ServerError, ServerGone, ValueError, TimeoutError) as e:
+            log.warning("web: the human seat in match %s ended: %s", match, e)
             self.error = str(e)
         except Exception as e:  # a bug must not take the page server down
             log.exception("web: the human seat in match %s failed", match)
