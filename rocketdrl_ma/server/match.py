@@ -14,7 +14,7 @@ import time
 import traceback
 import uuid
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
@@ -110,6 +110,7 @@ class MatchRunner:
         self._match_parser = self.env.action_parser
         self._match_obs = self.env.obs_builder
         self._fill: dict[str, Any] = {}
+        self._jump_pressed: set[str] = set()  # real-time: slots whose jump was pressed since the last tick
         self.status = MatchStatus.WAITING
         self.instance = uuid.uuid4().hex  # tells this match from an earlier one of the same id
         self.created_at = time.time()
@@ -372,6 +373,8 @@ class MatchRunner:
                 if decision > self.decision or decision < slot.acted_decision:
                     self.rejected["future_decision" if decision > self.decision else "late"] += 1
                     return
+                if controls.jump and not slot.last_controls.jump:  # a tap released before the next tick still jumps
+                    self._jump_pressed.add(slot.name)
                 slot.last_controls = controls
                 if decision == slot.acted_decision:  # a newer action for the same decision: counted once
                     return
@@ -510,6 +513,9 @@ class MatchRunner:
             with self._cond:
                 actions = {s.name: s.last_controls if s.waits_for or self.options.replacement == "repeat"
                            else NEUTRAL for s in self.slots.values() if s.occupant == "remote"}
+                for name in self._jump_pressed & actions.keys():
+                    actions[name] = replace(actions[name], jump=True)
+                self._jump_pressed.clear()
             actions.update(fill)
             for agent in env.agents:
                 actions.setdefault(agent, NEUTRAL)

@@ -55,8 +55,9 @@ log = logging.getLogger(__name__)
 STATIC_DIR = Path(__file__).parent / "static"
 PACKAGED_VENDOR_DIR = Path(__file__).parent / "vendor"  # in a wheel: the page's npm files, node_modules' layout
 MAX_STATES_PER_S = 30.0
-#: a page that plays gets its match's states up to this rate (real-time matches publish 60 a second)
-PLAYER_STATES_PER_S = 60.0
+#: a page that plays gets its match's states up to this rate: the server's tick rate, so a state of a real-time
+#: match (60 a second) that came sooner than 1/60 s after the last one is not held back
+PLAYER_STATES_PER_S = 120.0
 #: with nothing arriving, how often a followed source is looked at anyway (the first-state hint, a silent server)
 IDLE_LOOK_S = 0.25
 MAX_REQUEST_BYTES = 64 * 1024

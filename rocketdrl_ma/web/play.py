@@ -73,8 +73,11 @@ class HumanSeat(Bot):
 
     # ------------------------------------------------------------------ the bot's side (its own thread)
     def on_join(self, join: JoinInfo) -> None:
-        # a publisher of our own on the slot's action key: the page's changes go out between decisions
-        self._publisher = self.session.declare_publisher(join.keys["act"], express=True)
+        # a publisher of our own on the slot's action key: the page's changes go out between decisions; rare, and
+        # each one counts (a jump's press), so one waits for a full queue rather than being dropped
+        import zenoh
+        self._publisher = self.session.declare_publisher(join.keys["act"], express=True,
+                                                         congestion_control=zenoh.CongestionControl.BLOCK)
         self.join_info = join
         self._joined.set()
 
@@ -94,6 +97,7 @@ class HumanSeat(Bot):
         except SeatLeft:
             self._leave_lobby()
         except (ServerError, ServerGone, ValueError, TimeoutError) as e:
+            log.warning("web: the human seat in match %s ended: %s", match, e)
             self.error = str(e)
         except Exception as e:  # a bug must not take the page server down
             log.exception("web: the human seat in match %s failed", match)
@@ -130,12 +134,13 @@ class HumanSeat(Bot):
         """The page's newest controls: answered at each decision and sent at once."""
         vector = check_controls(values)
         join = self.join_info
+        # put under the lock: the bot's answer to a newer decision cannot overtake it (the server would drop this
+        # one as late)
         with self._lock:
             changed = not np.array_equal(vector, self._controls)
             self._controls = vector
-            decision = self._decision
-        if changed and join is not None and self._publisher is not None and not self._left.is_set():
-            self._publisher.put(action_message(join.secret, join.match, join.slot, decision, vector))
+            if changed and join is not None and self._publisher is not None and not self._left.is_set():
+                self._publisher.put(action_message(join.secret, join.match, join.slot, self._decision, vector))
 
     def leave(self) -> None:
         self._left.set()

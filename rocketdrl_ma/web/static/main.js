@@ -11,13 +11,17 @@ const $ = (id) => document.getElementById(id);
 const SHARP = new URLSearchParams(location.search).has("sharp");
 const view = new View($("view"));
 const timeline = new Timeline();
-const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [] };
+const stats = { frames: 0, bytesLast: 0, bytesMax: 0, arrivals: [], renders: [], busyMs: [] };
 let boostPanels = [];
 let socket = null, roster = null, source = null, lastList = null, status = null, hudHidden = false;
 const controls = new Controls();
 // this page's seat: {match, slot}; sent: the last controls sent and when each unanswered input left
 let seat = null, sent = null, inputSeq = 0, rebinding = null;
 const inputSentAt = new Map(), ackMs = [];
+// the last inputs' times (performance.now, ms): the key event, the send, the page server's ack; and the last
+// frames' ticks with their arrival: the latency benchmark lines them up with the servers' own times
+const inputTimes = [], frameArrivals = [];
+const TIMES_KEPT = 600;
 controls.onBallCam = () => { view.ballCam = !view.ballCam; markCamera(); };
 
 // ------------------------------------------------------------------------------------------- websocket
@@ -55,6 +59,8 @@ function onMessage(data) {
       if (noticeIsHint) showNotice(null);
       stats.frames += 1; stats.bytesLast = data.byteLength; stats.bytesMax = Math.max(stats.bytesMax, data.byteLength);
       stats.arrivals.push(now);
+      frameArrivals.push([message.t, now * 1000]);
+      if (frameArrivals.length > TIMES_KEPT) frameArrivals.shift();
       timeline.pushLive(message, now);
       if (!timeline.asPlayer && timeline.follow) {
         pendingGoal = (message.e || []).find((e) => e.kind === "goal") || pendingGoal;
@@ -219,21 +225,27 @@ function leaveSeat() {
 }
 
 // Send the controls when they change (the server keeps applying the last ones).
-function sendControls() {
+// `keyAt`: the time of the key event that changed them
+function sendControls(keyAt = null) {
   if (!seat || seat.ended) return;
   const c = controls.read();
   const key = c.join(",");
   if (key === sent) return;
   sent = key;
   inputSeq += 1;
-  inputSentAt.set(inputSeq, performance.now());
+  const sentAt = performance.now();
+  inputSentAt.set(inputSeq, sentAt);
   send({ op: "input", c, n: inputSeq });
+  inputTimes.push({ n: inputSeq, c, key: keyAt, sent: sentAt, ack: null });
+  if (inputTimes.length > TIMES_KEPT) inputTimes.shift();
 }
 
 function onAck(n) {
   const at = inputSentAt.get(n);
   inputSentAt.delete(n);
   if (at === undefined) return;
+  const entry = inputTimes.find((e) => e.n === n);
+  if (entry) entry.ack = performance.now();
   ackMs.push(performance.now() - at);
   if (ackMs.length > 50) ackMs.shift();
   const sorted = [...ackMs].sort((a, b) => a - b);
@@ -545,7 +557,7 @@ function showFinalStats(summary) {
 window.addEventListener("keydown", (e) => {
   if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
   if (rebinding) { controls.bind(rebinding, e.code); rebinding = null; showBindings(); e.preventDefault(); return; }
-  if (seat && controls.keyDown(e.code)) { e.preventDefault(); sendControls(); return; }
+  if (seat && controls.keyDown(e.code)) { e.preventDefault(); sendControls(e.timeStamp); return; }
   if (e.key === "1") setCamera("broadcast");
   else if (e.key === "2") setCamera("top");
   else if (e.key === "4") setCamera("orbit");
@@ -578,7 +590,7 @@ $("view").addEventListener("wheel", (e) => {
   e.preventDefault();
 }, { passive: false });
 
-window.addEventListener("keyup", (e) => { controls.keyUp(e.code); if (seat) sendControls(); });
+window.addEventListener("keyup", (e) => { controls.keyUp(e.code); if (seat) sendControls(e.timeStamp); });
 window.addEventListener("blur", () => { controls.releaseAll(); if (seat) sendControls(); });
 
 setInterval(() => send({ op: "list" }), 3000);
@@ -589,6 +601,15 @@ window.addEventListener("hashchange", () => {
 
 // ------------------------------------------------------------------------------------------- loop
 let last = performance.now() / 1000, shown = null;
+// How long the page stays busy after each frame (a software compositor takes the canvas synchronously): a message
+// posted as the frame is drawn runs once the page is free again; key presses and states wait as long.
+const afterFrame = new MessageChannel();
+let afterFrameFrom = null;
+afterFrame.port1.onmessage = () => {
+  stats.busyMs.push(performance.now() - afterFrameFrom);
+  if (stats.busyMs.length > 120) stats.busyMs.shift();
+  afterFrameFrom = null;
+};
 function loop() {
   const now = performance.now() / 1000;
   const dt = Math.min(now - last, 0.25);
@@ -606,6 +627,7 @@ function loop() {
   stats.loopMs = stats.loopMs === undefined ? 0 : 0.95 * stats.loopMs + 0.05 * (performance.now() - started);
   stats.renders.push(now);
   while (stats.renders.length && stats.renders[0] < now - 2) stats.renders.shift();
+  if (afterFrameFrom === null) { afterFrameFrom = performance.now(); afterFrame.port2.postMessage(0); }
   if (!SHARP && now - (stats.adaptedAt || 0) > 2) { // every 2 s, from the frame rate of those 2 s
     stats.adaptedAt = now;
     if (stats.renders.length > 2 && now - stats.renders[0] > 1.9) view.adaptResolution(rate(stats.renders));
@@ -613,6 +635,10 @@ function loop() {
   while (stats.arrivals.length && stats.arrivals[0] < now - 2) stats.arrivals.shift();
   requestAnimationFrame(loop);
 }
+
+function median(values) { return [...values].sort((a, b) => a - b)[Math.floor(values.length / 2)]; }
+
+function wall(ms) { return ms === null ? null : performance.timeOrigin + ms; }
 
 function rate(times) {
   return times.length > 1 ? (times.length - 1) / (times[times.length - 1] - times[0]) : 0;
@@ -640,16 +666,25 @@ window.__view = {
   // each car as drawn: [x, y, z, qx, qy, qz, qw, boost, flags], null for a car not in the game
   carStates: () => (shown ? shown.a.map((c) => (c ? [...c] : null)) : null),
   seat: () => (seat ? { ...seat } : null),
+  // whether the state drawn holds the cars for a kickoff countdown (no control reaches them then)
+  kickoffPending: () => (shown ? !!shown.k : null),
+  // the tick of the state drawn
+  shownTick: () => (shown ? shown.t : null),
   // the newest state received (not yet drawn, perhaps): its car `i`, and when it arrived (performance.now, ms)
   newestCar: (i) => (timeline.frames.length ? timeline.frames[timeline.frames.length - 1].a[i] : null),
   newestArrivalMs: () => timeline.lastArrival * 1000,
   // the last inputs' round trips to the page server (ms)
   inputAcksMs: () => [...ackMs],
+  // the same on the wall clock (ms since 1970, as the servers' time.time() * 1000): each input's key event,
+  // send and ack, and each of the last frames' tick and arrival
+  inputTimes: () => inputTimes.map((e) => ({ ...e, key: wall(e.key), sent: wall(e.sent), ack: wall(e.ack) })),
+  frameArrivals: () => frameArrivals.map(([t, at]) => [t, wall(at)]),
   inputsSent: () => inputSeq,
   ballCam: () => view.ballCam,
   roster: () => roster,
   stats: () => ({ fps: rate(stats.renders), statesPerS: rate(stats.arrivals), frames: stats.frames,
     bytesLast: stats.bytesLast, bytesMax: stats.bytesMax, loopMs: stats.loopMs,
+    busyAfterFrameMs: stats.busyMs.length ? median(stats.busyMs) : null,
     pixelRatio: view.renderer.getPixelRatio() }),
 };
 
