@@ -21,7 +21,7 @@ import sys
 import threading
 
 import pytest
-from server_helpers import HOSTILE, SHORT, Running, Secure, wait_for
+from server_helpers import HOSTILE, SHORT, Running, Secure, client_settings, wait_for, write_yaml
 
 from rocketdrl_ma.results import ResultsStore
 from rocketdrl_ma.server import PolicyBot, ServerError, ServerGone, Spectator
@@ -411,3 +411,78 @@ def test_only_a_users_own_training_runs_show_in_its_name(secure, procs):
         broadcast.close()
         hostile.popen.terminate()
     assert attack_result(hostile)["sent"] > 0
+
+
+# ------------------------------------------------------------------------------------- members (issue 50)
+# Members the server manages (`rocketdrl-ma users add`) share one Zenoh user (or none, in the open mode): the
+# server alone tells them apart, by their keys.
+def test_nobody_acts_as_a_member_without_its_key(procs, tmp_path):
+    """The default configuration: mallory, a member herself (so she holds the `members` password), claims to be
+    carol and signs with her own key: carol's seat and a create in carol's name are refused; carol's own
+    requests pass. The access control keeps members off the prefixes of the users Zenoh knows."""
+    from rocketdrl_ma.server.members import add_member
+    served = procs.serve(tmp_path)
+    for name, role in (("carol", "admin"), ("mallory", "player")):
+        add_member(served.key_dir, name, role)
+    carol = client_settings(served.endpoint, served.name, served.key_dir, user="carol")
+    session = carol.zenoh.open()
+    try:
+        LobbyClient(session, carol).create("matches/1v1.yaml", "seated", fill="idle", ready_timeout_s=60,
+                                           seats={"blue_0": "carol"})
+    finally:
+        session.close()
+    mallory = client_settings(served.endpoint, served.name, served.key_dir, user="mallory")
+    config = write_yaml(tmp_path / "mallory.yaml", {"zenoh": {"mode": "client", "connect": [served.endpoint],
+                                                              "auth": dict(mallory.zenoh.auth)}})
+    got = attack_result(lobby_attack(procs, "member", served.name, None, "--config", config, "--victim", "carol",
+                                     "--match", "seated", "--slots", "blue_0")[0])
+    assert got["connected"] and not got["created"] and not got["joined"], got
+    assert "must be signed with its key" in got["create_error"], got
+    # the users Zenoh knows stay out of the members' reach: the local admin's lobby key is not theirs
+    got = attack_result(lobby_attack(procs, "seat", served.name, None, "--config", config, "--victim", "local",
+                                     "--match", "seated")[0])
+    assert got["joined"] is False and got["error"] == "no reply", got
+
+
+def test_a_members_training_run_cannot_be_forged_in_the_open_mode(running, procs):
+    """The open mode: anyone may publish on any training key. alice is a member: her run's messages are signed,
+    and a copy altered by mallory (signature kept) never shows; a run under a name that is not a member's
+    (bob) is listed as unverified."""
+    from hostile_lobby import FORGED_ITERATION
+
+    from rocketdrl_ma.policies.registry import load_policy
+    from rocketdrl_ma.server.members import add_member
+    from rocketdrl_ma.web.feed import SpectatorFeed
+    from rocketdrl_ma.web.training import TrainingBroadcast
+    add_member(running.key_dir, "alice", "player")
+    copier, _ = lobby_attack(procs, "train", "test", running.endpoint, "--victim", "alice", "--match", "real",
+                             "--copy")
+    impostor, _ = lobby_attack(procs, "train", "test", running.endpoint, "--victim", "bob", "--match", "real")
+    broadcast = TrainingBroadcast("matches/1v1.yaml", "real", every=1, client=running.client(user="alice"),
+                                  env_overrides=SHORT, speed=2.0)
+    feed = SpectatorFeed(running.client()).open()
+    try:
+        def both_listed():
+            runs = {r["id"]: r["status"] for r in feed.training_runs()}
+            return runs if {"alice.real", "bob.real"} <= set(runs) else None
+        status = wait_for(both_listed, 20, "both runs in the list")
+        assert status["alice.real"] == "training" and status["bob.real"] == "unverified", status
+        follower = feed.follow("train", "alice.real")
+        assert broadcast.publish(1, load_policy("scripted:ball_chaser"))
+        shown, dropped = [], 0
+        while broadcast.busy():
+            update = follower.poll()
+            dropped += update.errors
+            if update.state is not None:
+                shown.append(update.state.info.get("iteration"))
+            broadcast.wait(0.05)
+        follower.close()
+    finally:
+        broadcast.close()
+        feed.close()
+        for p in (copier, impostor):
+            p.popen.terminate()
+    copied = attack_result(copier)["copied"]
+    assert copied > 0 and dropped > 0, (copied, dropped)  # the altered copies reached the page...
+    assert 1 in shown and FORGED_ITERATION not in shown, shown  # ...and none showed
+    attack_result(impostor)
