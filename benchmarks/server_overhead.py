@@ -8,12 +8,20 @@ the observations and state, wait for every bot's action, one env step (the serve
 ``inspect()["timing"]``). The lockstep deadline is set high (``--deadline-ms``) so that every decision
 waits for the real round trip instead of cutting it off; missed decisions are reported.
 
-Run from the repo root, e.g. ``nice -n 10 .venv/bin/python benchmarks/server_overhead.py``.
+Each remote match also runs *unsigned* in the same run: the server's Ed25519 signatures and the actions'
+HMACs replaced by constants and every check passing (server and bots alike, ``unsigned_protocol``), so the
+two rows differ by what the protocol's cryptography costs.
+
+Run from the repo root, e.g. ``nice -n 10 .venv/bin/python benchmarks/server_overhead.py``; a quick check:
+``--configs matches/1v1.yaml --clock-s 2``.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
+import importlib
 import os
+import pkgutil
 import socket
 import subprocess
 import sys
@@ -33,6 +41,31 @@ from rocketdrl_ma.server.lobby import MatchServer  # noqa: E402
 from rocketdrl_ma.server.settings import MatchOptions, ServerSettings  # noqa: E402
 
 POLICY = "scripted:ball_chaser"
+UNSIGNED_BOT = "--unsigned-bot"  # argv[1] of this script run as a bot process of the unsigned baseline
+
+
+@contextlib.contextmanager
+def unsigned_protocol():
+    """The protocol without its cryptography, for the baseline only: signatures and action MACs are constant
+    bytes, and signature checks pass. Every server module is imported first so that each name bound to
+    ``action_mac`` is replaced, wherever the match code keeps it."""
+    import rocketdrl_ma.server as server_package
+    from rocketdrl_ma.server import crypto
+    for module in pkgutil.iter_modules(server_package.__path__):
+        importlib.import_module(f"rocketdrl_ma.server.{module.name}")
+    real = {"sign": crypto.ServerIdentity.sign, "verify": crypto.ServerKey.verify, "mac": crypto.action_mac}
+    holders = [m for name, m in list(sys.modules.items())
+               if name.startswith("rocketdrl_ma.server") and getattr(m, "action_mac", None) is real["mac"]]
+    crypto.ServerIdentity.sign = lambda self, body: bytes(64)
+    crypto.ServerKey.verify = lambda self, body, signature: None
+    for module in holders:
+        module.action_mac = lambda secret, body: bytes(crypto.MAC_BYTES)
+    try:
+        yield
+    finally:
+        crypto.ServerIdentity.sign, crypto.ServerKey.verify = real["sign"], real["verify"]
+        for module in holders:
+            module.action_mac = real["mac"]
 
 
 def _stats(decision_s: list[float]) -> dict:
@@ -65,8 +98,15 @@ def _free_endpoint() -> str:
         return f"tcp/127.0.0.1:{s.getsockname()[1]}"
 
 
-def run_remote(config: str, overrides: dict, seed: int, deadline_ms: float) -> dict:
+def run_remote(config: str, overrides: dict, seed: int, deadline_ms: float, signed: bool = True) -> dict:
+    with contextlib.nullcontext() if signed else unsigned_protocol():
+        return _run_remote(config, overrides, seed, deadline_ms, signed)
+
+
+def _run_remote(config: str, overrides: dict, seed: int, deadline_ms: float, signed: bool) -> dict:
     endpoint = _free_endpoint()
+    bot_cli = [sys.executable, "-m", "rocketdrl_ma.cli"] if signed else [sys.executable, os.path.abspath(__file__),
+                                                                        UNSIGNED_BOT]
     with tempfile.TemporaryDirectory(prefix="server-overhead-") as tmp:
         key_dir = os.path.join(tmp, "keys")
         settings = ServerSettings.from_dict({"name": "bench", "zenoh": {"mode": "peer", "listen": [endpoint]},
@@ -76,7 +116,7 @@ def run_remote(config: str, overrides: dict, seed: int, deadline_ms: float) -> d
                 "config": config, "overrides": overrides, "deadline_ms": deadline_ms, "ready_timeout_s": 600.0,
                 "seed": seed, "open": True}), "m")
             bots = [subprocess.Popen(
-                [sys.executable, "-m", "rocketdrl_ma.cli", "bot", "--policy", POLICY, "--match", "m", "--slot", slot,
+                [*bot_cli, "bot", "--policy", POLICY, "--match", "m", "--slot", slot,
                  "--server", "bench", "--connect", endpoint, "--key-dir", key_dir], cwd=ROOT, stdout=subprocess.DEVNULL,
                 stderr=subprocess.PIPE, text=True) for slot in runner.slots]
             runner.join_thread()
@@ -95,6 +135,11 @@ def run_remote(config: str, overrides: dict, seed: int, deadline_ms: float) -> d
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == [UNSIGNED_BOT]:  # a bot process of the unsigned baseline
+        from rocketdrl_ma.cli import main as cli_main
+        with unsigned_protocol():
+            return cli_main(argv[1:])
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--configs", nargs="+", default=["matches/1v1.yaml", "matches/4v4.yaml"])
     ap.add_argument("--clock-s", type=float, default=20.0, help="game clock of each match (15 decisions per second)")
@@ -107,7 +152,8 @@ def main(argv: list[str] | None = None) -> int:
     for config in args.configs:
         local = run_local(config, overrides, args.seed)
         remote = run_remote(config, overrides, args.seed, args.deadline_ms)
-        rows.append((config, local, remote))
+        unsigned = run_remote(config, overrides, args.seed, args.deadline_ms, signed=False)
+        rows.append((config, local, remote, unsigned))
         print(f"{config}: local {local['per_s']:.0f} decisions/s, remote {remote['per_s']:.0f} decisions/s",
               file=sys.stderr, flush=True)
 
@@ -115,19 +161,22 @@ def main(argv: list[str] | None = None) -> int:
           f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}\n")
     print("| match | run | decisions | decisions/s | median ms | p99 ms | server wait median / p99 ms | missed |")
     print("|---|---|---|---|---|---|---|---|")
-    for config, local, remote in rows:
+    for config, local, remote, unsigned in rows:
         name = os.path.splitext(os.path.basename(config))[0]
         print(f"| {name} | local (in-process) | {local['decisions']} | {local['per_s']:.0f} | {local['median_ms']:.2f} "
               f"| {local['p99_ms']:.2f} | — | — |")
-        print(f"| {name} | remote ({remote['bots']} bot processes) | "
-              f"{remote['decisions']} | {remote['per_s']:.0f} | {remote['median_ms']:.2f} | {remote['p99_ms']:.2f} | "
-              f"{remote['wait_median_ms']:.2f} / {remote['wait_p99_ms']:.2f} | {remote['missed']} |")
-    print("\n| match | remote/local decisions/s | remote/local median latency | remote/local p99 latency |")
-    print("|---|---|---|---|")
-    for config, local, remote in rows:
+        for label, run in (("remote", remote), ("remote unsigned", unsigned)):
+            print(f"| {name} | {label} ({run['bots']} bot processes) | "
+                  f"{run['decisions']} | {run['per_s']:.0f} | {run['median_ms']:.2f} | {run['p99_ms']:.2f} | "
+                  f"{run['wait_median_ms']:.2f} / {run['wait_p99_ms']:.2f} | {run['missed']} |")
+    print("\n| match | remote/local decisions/s | remote/local median latency | remote/local p99 latency "
+          "| signed/unsigned decisions/s | signed/unsigned median latency |")
+    print("|---|---|---|---|---|---|")
+    for config, local, remote, unsigned in rows:
         name = os.path.splitext(os.path.basename(config))[0]
         print(f"| {name} | {remote['per_s'] / local['per_s']:.2f} | {remote['median_ms'] / local['median_ms']:.1f}x "
-              f"| {remote['p99_ms'] / local['p99_ms']:.1f}x |")
+              f"| {remote['p99_ms'] / local['p99_ms']:.1f}x | {remote['per_s'] / unsigned['per_s']:.2f} "
+              f"| {remote['median_ms'] / unsigned['median_ms']:.2f}x |")
     return 0
 
 

@@ -1,4 +1,4 @@
-"""``rocketdrl-ma serve | bot | watch | lobby | router | keys`` (standard library at the top: ``--help`` stays fast)."""
+"""``rocketdrl-ma serve | bot | watch | lobby | router | keys | users`` (standard library at the top: ``--help`` stays fast)."""
 from __future__ import annotations
 
 import argparse
@@ -79,7 +79,8 @@ def _run_serve(args: argparse.Namespace) -> int:
         if not settings.access.enabled:
             print("WARNING: OPEN MODE, for demos only: no Zenoh authentication. Any process that reaches "
                   f"{endpoints} may read all the traffic and play open matches, by any user name; seats are "
-                  "refused. server/local.yaml authenticates every connection.", file=sys.stderr, flush=True)
+                  "only for members (`rocketdrl-ma users add`), whose requests are signed. server/local.yaml "
+                  "authenticates every connection.", file=sys.stderr, flush=True)
         for match in list(server.matches.values()):  # the config's own matches: their tickets, for the operator
             if match.tickets:
                 path = write_tickets(settings.keys_path, match.id, match.tickets)
@@ -219,6 +220,32 @@ def _run_keys(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run_users(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from rocketdrl_ma.server.members import MEMBERS_FILE, add_member, read_members, remove_member
+    from rocketdrl_ma.server.settings import SERVER_USER, ServerSettings
+
+    settings = ServerSettings.load(args.config)
+    key_dir = args.key_dir or settings.keys_path
+    if args.action == "list":
+        register = Path(key_dir) / MEMBERS_FILE
+        for member in (read_members(register) if register.is_file() else {}).values():
+            print(f"{member.name} {member.role}")
+        return 0
+    if not args.name:
+        raise ValueError(f"users {args.action}: name the user")
+    if args.action == "remove":
+        remove_member(key_dir, args.name)
+        print(f"removed {args.name}: the server refuses its key from its next request on", flush=True)
+        return 0
+    path = add_member(key_dir, args.name, args.role, reserved=(*settings.access.roles, SERVER_USER))
+    print(f"added {args.name} ({args.role}); its key: {path} (keep it private; its clients sign with it: "
+          f"--user {args.name}, found there on this machine, or user_key_file in a client YAML). The running "
+          "server accepts it now", flush=True)
+    return 0
+
+
 def add_commands(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("serve", help="run a Zenoh match server (lobby, matches, results)")
     p.add_argument("config", help="server YAML, e.g. server/local.yaml")
@@ -290,3 +317,11 @@ def add_commands(sub: argparse._SubParsersAction) -> None:
                    help="the endpoint written into the client YAMLs (default: the config's TLS listen endpoints)")
     k.add_argument("--clients", default=None, help="folder for the client YAMLs (default <key_dir>/clients)")
     k.set_defaults(run=_clean_errors(_run_keys))
+
+    u = sub.add_parser("users", help="add, remove or list the members a server manages (no restart needed)")
+    u.add_argument("action", choices=["add", "remove", "list"])
+    u.add_argument("name", nargs="?", default=None, help="the member's user name")
+    u.add_argument("--role", choices=["admin", "player", "spectator"], default="player")
+    u.add_argument("--config", default="server/local.yaml", help="the server YAML (default server/local.yaml)")
+    u.add_argument("--key-dir", default=None, help="replace the server's key folder")
+    u.set_defaults(run=_clean_errors(_run_users))

@@ -8,7 +8,11 @@ The rules (default deny; ``R`` is ``rocketdrl/<server>``):
   fetching ``R/key``; watching the server's liveliness token ``R/alive`` and every user's training runs
   ``R/u/*/train/**``;
 - ``admin`` users also: querying any user's ``R/u/*/invite`` (the league invites its remote entrants);
-- the user ``server`` (the match server as a client of a router): everything under ``R/**``.
+- the user ``server`` (the match server as a client of a router): everything under ``R/**``;
+- the user ``members``, as whom every member the server manages connects (``members.py``): what every user
+  may, and everything on ``R/u/*/**`` but the prefixes of the users above (a deny rule, which Zenoh applies
+  before any allow rule). The transport cannot tell one member from another: the server checks each member's
+  signature wherever it matters.
 
 Zenoh applies them to the connections of the session holding them: the server's own (it is a peer,
 bots connect as clients) or a router's. Peers that connect to each other directly bypass them
@@ -20,7 +24,7 @@ import secrets
 from pathlib import Path
 
 from rocketdrl_ma.validation import check_name
-from .settings import SERVER_USER
+from .settings import MEMBERS_USER, SERVER_USER
 
 ALL_MESSAGES = ["put", "delete", "declare_subscriber", "query", "reply", "declare_queryable",
                 "liveliness_token", "liveliness_query", "declare_liveliness_subscriber"]
@@ -62,7 +66,8 @@ def add_missing_users(path: str | Path, users: list[str]) -> list[str]:
 
 def acl_config(server: str, roles: dict[str, str], router: bool = False) -> dict:
     """Zenoh's ``access_control`` section for ``server`` and ``{user: role}`` (``router``: the server is the
-    router's client ``server`` and needs everything under its root)."""
+    router's client ``server`` and needs everything under its root), with the ``members`` user of the members
+    the server manages."""
     root = f"rocketdrl/{check_name('server', server)}"
 
     def allow(rule_id: str, flows: list[str], messages: list[str], *keys: str) -> dict:
@@ -93,6 +98,14 @@ def acl_config(server: str, roles: dict[str, str], router: bool = False) -> dict
         if roles[user] == "admin":
             policy_rules += ["invite_query", "invite_reply"]
         policies.append({"id": f"policy_{user}", "rules": policy_rules, "subjects": [f"user_{user}"]})
+    # members: every prefix the users above do not own (the server tells members apart by their signatures)
+    rules.append(allow("members_own", BOTH, ALL_MESSAGES, f"{root}/u/*/**"))
+    owned = sorted({*roles, SERVER_USER, MEMBERS_USER})
+    rules.append({"id": "members_not_users", "permission": "deny", "flows": BOTH, "messages": ALL_MESSAGES,
+                  "key_exprs": [f"{root}/u/{user}/**" for user in owned]})
+    subjects.append({"id": "user_members", "usernames": [MEMBERS_USER]})
+    policies.append({"id": "policy_members", "rules": [*common, "members_own", "members_not_users"],
+                     "subjects": ["user_members"]})
     if router:
         rules.append(allow("match_server", BOTH, ALL_MESSAGES, f"{root}/**"))
         subjects.append({"id": "user_server", "usernames": [SERVER_USER]})

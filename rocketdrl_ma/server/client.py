@@ -21,6 +21,7 @@ from typing import Any
 
 from .crypto import (KeyExchange, ServerKey, SignatureError, open_secret, parse_secret, random_bytes,
                      read_secret_file, request_mac)
+from .members import SIGNED_OPS, load_member_key, request_text
 from .protocol import Keys, ProtocolError, decode_space, open_sealed, pack, pack_value, unpack, unpack_map
 from .settings import ClientSettings
 
@@ -179,6 +180,8 @@ class LobbyClient:
         self.keys, self.user, self.timeout_s = Keys(self.client.server), self.client.user_name, timeout_s
         self._server_key: ServerKey | None = None
         self.key_source = ""
+        key_path = self.client.user_key_path
+        self.member_key = load_member_key(key_path) if key_path is not None else None  # signs a member's requests
 
     @property
     def server_key(self) -> ServerKey:
@@ -208,10 +211,15 @@ class LobbyClient:
         nonce = nonce or random_bytes()
         raw_args = pack_value(args or {})
         message = {"op": op, "nonce": nonce, "args": raw_args}
-        if prove_with is not None:
+        signs = self.member_key is not None and op in SIGNED_OPS
+        if prove_with is not None or signs:
             challenge = self.request("challenge")["challenge"]
-            message.update(challenge=challenge, mac=request_mac(prove_with, op, self.keys.server, self.user,
-                                                                challenge, raw_args))
+            message["challenge"] = challenge
+            if prove_with is not None:
+                message["mac"] = request_mac(prove_with, op, self.keys.server, self.user, challenge, raw_args)
+            if signs:
+                message["user_sig"] = self.member_key.sign_tagged(
+                    request_text(op, self.keys.server, self.user, challenge, nonce, raw_args))
         unverified: list[str] = []
         for reply in self.session.get(self.keys.lobby(self.user), payload=pack(message), timeout=self.timeout_s,
                                       consolidation=zenoh.ConsolidationMode.NONE):
@@ -252,6 +260,10 @@ class LobbyClient:
 
     def list(self) -> list[dict]:
         return self.request("list")["matches"]
+
+    def members(self) -> dict[str, dict]:
+        """The members the server manages now: ``{name: {"role", "key": raw Ed25519 public key}}``."""
+        return self.request("members")["members"]
 
     def inspect(self, match: str, retry_s: float | None = None) -> dict:
         """The match's status, slots and counters. While no signed reply comes back (a flooded, rate-limited

@@ -135,6 +135,10 @@ class ServerIdentity:
     def sign(self, body: bytes) -> bytes:
         return self._private.sign(SIGNED_TAG + body)
 
+    def sign_tagged(self, tagged: bytes) -> bytes:
+        """A signature over ``tagged`` as it is (a member's key signs its own tags, never ``SIGNED_TAG``)."""
+        return self._private.sign(tagged)
+
 
 class ServerKey:
     """A server's public key, as a client pins it."""

@@ -1,7 +1,8 @@
 """``rocketdrl-ma keys CONFIG``: make what a server (or router) YAML names but lacks, never overwriting.
 
 - the server's Ed25519 key (``<key_dir>/server.key``, ``server.pub``) and admin secret (``admin.secret``);
-- ``access.users_file``: a random password for the user ``server`` and for every user in ``access.roles``;
+- ``access.users_file``: a random password for the users ``server`` and ``members`` (whom the members the server
+  manages connect as: ``rocketdrl-ma users add``) and for every user in ``access.roles``;
 - TLS, for the process that listens (the server in peer mode, or the router): a CA (``<key_dir>/tls/ca.pem``,
   its key beside it) and a certificate for ``--tls-host`` names/addresses at the paths its ``zenoh.tls``
   names (``listen_certificate``, ``listen_private_key``);
@@ -22,7 +23,8 @@ import yaml
 
 from .crypto import ServerIdentity, load_or_create_secret, write_private
 from .router import RouterSettings
-from .settings import SERVER_USER, ServerSettings, ZenohSettings, _endpoint_host, _load_yaml, is_encrypted_endpoint
+from .settings import (MEMBERS_USER, SERVER_USER, ServerSettings, ZenohSettings, _endpoint_host, _load_yaml,
+                       is_encrypted_endpoint)
 
 CERT_DAYS = 825
 
@@ -127,7 +129,7 @@ def make_keys(config: str, tls_hosts: list[str] | None = None, connect: list[str
     if not server.access.enabled:
         made.append("no users: the config has no access section (the open mode)")
         return made
-    users = _users_file(server.users_path, [SERVER_USER, *sorted(server.access.roles)], made)
+    users = _users_file(server.users_path, [SERVER_USER, MEMBERS_USER, *sorted(server.access.roles)], made)
     out = Path(clients_dir) if clients_dir else key_dir / "clients"
     endpoints = connect or listen or list(listener.listen_endpoints())
     for user, role in sorted(server.access.roles.items()):

@@ -10,7 +10,9 @@ error, is sealed (signed) and echoes the request's ``op`` and ``nonce``: ``{"kin
 Ops: ``challenge`` (a single-use nonce for a MAC), ``list``, ``inspect``, ``create`` and ``stop`` (the
 admin role and the admin secret; ``create``'s tickets come back sealed to the request's ``client_key``),
 ``join`` (an open match, the user's seat, or the slot's ticket), ``rejoin`` (the slot's rejoin key: new
-keys) and ``leave`` (the slot's secret).
+keys), ``leave`` (the slot's secret) and ``members`` (the public keys of the members the server manages).
+A member (``members.py``: a user added while the server runs) also signs its ``create``, ``stop``, ``join``,
+``rejoin`` and ``leave`` with its key (``user_sig``, over the same single-use challenge).
 """
 from __future__ import annotations
 
@@ -29,12 +31,13 @@ from .access import acl_config, add_missing_users, read_users_file
 from .crypto import (NONCE_BYTES, KeyExchange, ServerIdentity, load_or_create_secret, random_bytes, request_mac,
                      same_mac, seal_secret)
 from .match import INTERNAL_ERROR, JoinRequest, MatchRunner
+from .members import MEMBERS_FILE, SIGNED_OPS, MemberRegister, request_text
 from .protocol import (ENDED_STATUSES, MAX_REQUEST_BYTES, Keys, ProtocolError, pack, pack_value, seal, unpack,
                        unpack_map)
-from .settings import SERVER_USER, MatchOptions, ServerSettings
+from .settings import MEMBERS_USER, SERVER_USER, MatchOptions, ServerSettings
 
 log = logging.getLogger(__name__)
-OPS = ("challenge", "list", "inspect", "create", "stop", "join", "rejoin", "leave")
+OPS = ("challenge", "list", "inspect", "create", "stop", "join", "rejoin", "leave", "members")
 PLAYER_OPS = ("join", "rejoin", "leave")
 CHALLENGE_TTL_S = 30.0
 MAX_CHALLENGES = 4096
@@ -42,13 +45,15 @@ MAX_NONCE_BYTES = 64
 
 
 class RateLimiter:
-    """Token buckets: ``rate_per_s`` requests per user (``burst`` at once); ``shared_total``: also ten times that
-    in total. With Zenoh authentication the user in the key is who sent the request, so one user's flood empties
-    its own bucket only (no shared total a flood could drain); without it, names are free to claim and only a
-    total bounds what the server signs."""
+    """Token buckets: ``rate_per_s`` requests per user name (``burst`` at once), and for names anyone may claim
+    also ten times that in total (``allow(user, claimable=True)``). A user Zenoh authenticated is who sent the
+    request, so its flood empties its own bucket only; a name is claimable without Zenoh users (the open mode)
+    and among members (who share one Zenoh user): only a total bounds what the server signs for those. A
+    queryable cannot bound a Zenoh session instead: a query carries its sender's ``source_info`` only if the
+    sender sets it (and then any id it likes), and a process may open as many sessions as it wants."""
 
-    def __init__(self, rate_per_s: float, burst: int, max_users: int = 4096, shared_total: bool = True):
-        self.rate, self.burst, self.max_users, self.shared_total = rate_per_s, burst, max_users, shared_total
+    def __init__(self, rate_per_s: float, burst: int, max_users: int = 4096):
+        self.rate, self.burst, self.max_users = rate_per_s, burst, max_users
         self._buckets: OrderedDict[str, list[float]] = OrderedDict()
         self._total = [burst * 10.0, time.monotonic()]
         self._lock = threading.Lock()
@@ -61,7 +66,7 @@ class RateLimiter:
         bucket[0] -= 1.0
         return True
 
-    def allow(self, user: str) -> bool:
+    def allow(self, user: str, claimable: bool = True) -> bool:
         if self.rate <= 0:
             return True
         now = time.monotonic()
@@ -71,7 +76,7 @@ class RateLimiter:
             while len(self._buckets) > self.max_users:
                 self._buckets.popitem(last=False)
             return self._take(bucket, self.rate, self.burst, now) and \
-                (not self.shared_total or self._take(self._total, self.rate * 10, self.burst * 10, now))
+                (not claimable or self._take(self._total, self.rate * 10, self.burst * 10, now))
 
 
 class Challenges:
@@ -113,8 +118,8 @@ class MatchServer:
         self.matches: dict[str, MatchRunner] = {}
         self._lock = threading.Lock()
         self._store_lock = threading.Lock()
-        self._rate = RateLimiter(settings.limits.requests_per_s, settings.limits.request_burst,
-                                 shared_total=not settings.access.enabled)
+        self._rate = RateLimiter(settings.limits.requests_per_s, settings.limits.request_burst)
+        self.members = MemberRegister(key_dir / MEMBERS_FILE)
         self._challenges = Challenges()
         self.session = None
         self._declared: list[Any] = []
@@ -130,7 +135,7 @@ class MatchServer:
         zenoh = self.settings.zenoh
         users_path = self.settings.users_path
         if zenoh.mode != "client":  # made on the first start, as the key and admin secret (a router reads it too)
-            for user in add_missing_users(users_path, sorted(access.roles)):
+            for user in add_missing_users(users_path, [*sorted(access.roles), MEMBERS_USER]):
                 log.info("made a password for user %s in %s", user, users_path)
         users = read_users_file(users_path)
         extra: dict[str, Any] = {}
@@ -140,7 +145,7 @@ class MatchServer:
             extra["transport/auth/usrpwd/user"] = SERVER_USER
             extra["transport/auth/usrpwd/password"] = users[SERVER_USER]
         else:
-            missing = sorted(set(access.roles) - set(users))
+            missing = sorted({*access.roles, MEMBERS_USER} - set(users))
             if missing:
                 raise ValueError(f"access.roles: users {missing} have no password in access.users_file")
             extra["transport/auth/usrpwd/dictionary_file"] = str(users_path)
@@ -200,9 +205,11 @@ class MatchServer:
         apply (config names, bounds, quotas)."""
         match_id = check_name("id", match_id) if match_id is not None else secrets.token_hex(4)
         limits = self.settings.limits
-        if options.seats and not self.settings.access.enabled:
-            raise ValueError("seats: need authenticated users (an access section: Zenoh users and access control); "
-                             "without them anyone may claim a seat's user name. Use tickets instead")
+        if options.seats and not self.settings.access.enabled and \
+                not all(self.members.get(user) is not None for user in options.seats.values()):
+            raise ValueError("seats: need authenticated users (an access section: Zenoh users and access control, "
+                             "or members added by `rocketdrl-ma users add`); without them anyone may claim a "
+                             "seat's user name. Use tickets instead")
         if creator is not None:
             limits.check_config_name(options.config)
             limits.check_options(options)
@@ -270,7 +277,8 @@ class MatchServer:
         user = self.keys.parse_lobby_user(key)
         if user is None:
             return
-        if not self._rate.allow(user):
+        access = self.settings.access
+        if not self._rate.allow(user, claimable=not (access.enabled and user in access.roles)):
             # unsigned and cheap: a flood must not make the server sign for it
             self.requests_limited += 1
             query.reply_err(pack({"ok": False, "error": "rate limited: too many lobby requests"}))
@@ -310,17 +318,29 @@ class MatchServer:
             raise ProtocolError("args: expected a bin holding the msgpack map of the op's fields")
         args = unpack_map(raw_args, MAX_REQUEST_BYTES, "args")
         access = self.settings.access
-        role = access.role(user)
+        # a user Zenoh knows is who it is; any other name is a member's only with the member's signature
+        member = None if access.enabled and user in access.roles else self.members.get(user)
+        role = member.role if member is not None else access.role(user)
         if role is None:
             raise ValueError(f"user: {user!r} has no role on this server")
         challenge_used = []
 
-        def proves(key: bytes) -> bool:
-            """A MAC under ``key`` over a challenge this user was given (used up at the first check)."""
+        def fresh_challenge() -> bool:
+            """Whether the request's challenge was given to this user and is fresh (used up at the first check)."""
             if not challenge_used:
                 challenge_used.append(self._challenges.take(user, request.get("challenge")))
-            return challenge_used[0] and same_mac(request.get("mac"), request_mac(
+            return challenge_used[0]
+
+        def proves(key: bytes) -> bool:
+            """A MAC under ``key`` over a challenge this user was given."""
+            return fresh_challenge() and same_mac(request.get("mac"), request_mac(
                 key, op, self.settings.name, user, request["challenge"], raw_args))
+
+        if member is not None and op in SIGNED_OPS and not (fresh_challenge() and member.verify(
+                request_text(op, self.settings.name, user, request["challenge"], request["nonce"], raw_args),
+                request.get("user_sig"))):
+            raise ValueError(f"op {op!r}: {user!r} is a member of this server: the request must be signed with its "
+                             "key (user_key_file) over a fresh challenge (op challenge)")
 
         if op == "challenge":
             return {"challenge": self._challenges.issue(user)}
@@ -330,6 +350,11 @@ class MatchServer:
             return {"server": self.settings.name, "matches": [m.summary() for m in runners]}
         if op == "inspect":
             return self.match(args.get("match")).inspect()
+        if op == "members":
+            # zenoh_users: the users whose prefix Zenoh lets only them publish on (their runs need no signature)
+            return {"members": {m.name: {"role": m.role, "key": m.public_key}
+                                for m in self.members.members().values()},
+                    "zenoh_users": sorted(access.roles) if access.enabled else []}
         if op in PLAYER_OPS and role == "spectator":
             raise ValueError(f"op {op!r}: user {user!r} is a spectator on this server")
         if op == "create":

@@ -36,6 +36,8 @@ MATCH_MODES = ("lockstep", "realtime")
 REPLACEMENTS = ("repeat", "neutral")
 ROLES = ("admin", "player", "spectator")
 SERVER_USER = "server"  # the match server's own Zenoh user when it is a client of a router
+MEMBERS_USER = "members"  # the one Zenoh user as whom every member the server manages connects (members.py)
+MEMBERS_DIR = "members"  # in the key dir: each member's private key, <name>.key
 LOCAL_USER = "local"  # who a client on the server's machine authenticates as unless it names a user
 USERS_FILE = "users.txt"  # in the key dir unless access.users_file names another
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -443,6 +445,9 @@ class ClientSettings:
     announces (remembered from then on; several different announced keys are refused).
     ``admin_secret_file`` or ``admin_secret`` (hex): for create and stop (default
     ``<key_dir>/admin.secret`` if it exists). ``key_dir`` defaults to ``runs/server/<server>``.
+    ``user_key_file``: the private key of a member the server manages (``rocketdrl-ma users add``; default
+    ``<key_dir>/members/<user>.key`` if readable): its requests and training runs are signed with it, and on the
+    server's machine it connects as the Zenoh user ``members`` with that user's password from ``users.txt``.
     ``inspect_retry_s``: how long an ``inspect`` (a waiting bot's "is my match still on?") goes on asking,
     with exponential backoff and jitter, while no signed reply comes back (a lobby rate-limited by a flood,
     a lost reply) before the server counts as gone; 0: one try.
@@ -458,6 +463,7 @@ class ClientSettings:
     known_servers: PathText | None = None
     inspect_retry_s: Annotated[float, Range(minimum=0), Expect("a finite number of seconds >= 0")] = 30.0
     credentials_from: PathText | None = None
+    user_key_file: PathText | None = None
 
     @classmethod
     def from_dict(cls, d: dict) -> "ClientSettings":
@@ -471,7 +477,11 @@ class ClientSettings:
             raise ValueError(f"zenoh.mode: a bot, spectator or lobby client connects as a client (Zenoh access "
                              f"control does not hold for peers), got {self.zenoh.mode!r}")
         auth_user = self.zenoh.auth.get("user")
-        if auth_user is not None and self.user is not None and auth_user != self.user:
+        if auth_user == MEMBERS_USER:
+            if self.user is None or self.user_key_path is None:
+                raise ValueError(f"user: a client authenticated as {MEMBERS_USER!r} is a member: name it (user) and "
+                                 "its key (user_key_file, written by `rocketdrl-ma users add`)")
+        elif auth_user is not None and self.user is not None and auth_user != self.user:
             raise ValueError(f"user: {self.user!r} differs from zenoh.auth.user {auth_user!r}; the server "
                              "knows a client by its authenticated user")
 
@@ -483,11 +493,18 @@ class ClientSettings:
         except OSError:  # no server in this folder, or another OS user's: no credentials
             return self
         user = self.user or LOCAL_USER
+        passwords = {}
         for line in lines:
             name, sep, password = line.partition(":")
-            if sep and name == user and password:
-                return replace(self, zenoh=replace(self.zenoh, auth={"user": user, "password": password}),
-                               credentials_from=str(path))
+            if sep and password:
+                passwords[name] = password
+        if user in passwords:
+            return replace(self, zenoh=replace(self.zenoh, auth={"user": user, "password": passwords[user]}),
+                           credentials_from=str(path))
+        if self.user is not None and MEMBERS_USER in passwords and self.user_key_path is not None:
+            return replace(self, zenoh=replace(self.zenoh, auth={"user": MEMBERS_USER,
+                                                                 "password": passwords[MEMBERS_USER]}),
+                           credentials_from=str(path))
         return self
 
     @classmethod
@@ -498,7 +515,7 @@ class ClientSettings:
     def replace(self, **changes: Any) -> "ClientSettings":
         current = _values(self)
         if self.credentials_from is not None and "zenoh" not in changes and \
-                {"user", "key_dir", "server"} & {k for k, v in changes.items() if v is not None}:
+                {"user", "key_dir", "server", "user_key_file"} & {k for k, v in changes.items() if v is not None}:
             current.update(zenoh=replace(self.zenoh, auth={}), credentials_from=None)  # found again for the change
         return ClientSettings.from_dict({**current, **changes})
 
@@ -509,6 +526,18 @@ class ClientSettings:
     @property
     def keys_path(self) -> Path:
         return Path(self.key_dir if self.key_dir is not None else f"runs/server/{self.server}")
+
+    @property
+    def user_key_path(self) -> Path | None:
+        """The member key this client signs with: ``user_key_file``, else its user's key in the server's folder
+        if this process may read it, else None."""
+        if self.user_key_file is not None:
+            return Path(self.user_key_file)
+        default = self.keys_path / MEMBERS_DIR / f"{self.user_name}.key"
+        try:
+            return default if default.is_file() and os.access(default, os.R_OK) else None
+        except OSError:  # another OS user's folder
+            return None
 
     @property
     def known_servers_path(self) -> Path:
@@ -530,6 +559,9 @@ def _check_roles(field_name: str, roles: dict[str, str]) -> dict[str, str]:
         check_name(f"{field_name} user", user)
         if user == SERVER_USER:
             raise ValueError(f"{field_name}: {SERVER_USER!r} is the match server's own user; give it no role")
+        if user == MEMBERS_USER:
+            raise ValueError(f"{field_name}: {MEMBERS_USER!r} is the Zenoh user the server's members share "
+                             "(`rocketdrl-ma users add`); give it no role")
         check_choice(f"{field_name}.{user}", role, ROLES)
     return roles
 

@@ -5,7 +5,9 @@ Nothing else in ``rocketdrl_ma.web`` touches Zenoh keys or payloads. A match's s
 signed by its server: a follower shows only those that verify against the server's key, for that match
 instance, in order (``rocketdrl_ma.server.client.SealedStream``). A follower shows only the newest state
 (the page shows at most ``max_rate`` states a second, decoded on ``poll``) but every event, so
-throttling never loses a goal.
+throttling never loses a goal. A training run counts as its user's when Zenoh lets only that user publish
+on its prefix (the server's own users), or when each message is signed by the key the server lists for that
+member (``rocketdrl_ma.server.members``; unsigned ones are dropped); any other run is listed as ``unverified``.
 """
 from __future__ import annotations
 
@@ -16,6 +18,7 @@ from typing import Any, Callable
 from rocketdrl_ma.rules.events import GameEvent
 from rocketdrl_ma.rules.state import GameState
 from rocketdrl_ma.server.client import LobbyClient, SealedStream, ServerError, ServerGone
+from rocketdrl_ma.server.members import Member, open_run
 from rocketdrl_ma.server.protocol import Keys, MatchStatus, ProtocolError, decode_events, decode_state, unpack
 from rocketdrl_ma.validation import check_name
 from rocketdrl_ma.server.settings import ClientSettings
@@ -191,9 +194,21 @@ class SpectatorFeed:
         except (ServerGone, ServerError):
             return []
 
+    def _run_signers(self) -> tuple[dict[str, Member], set[str]]:
+        """The server's members (whose runs must be signed) and the users Zenoh authenticates (whose prefix is
+        theirs alone), from its signed ``members`` reply; none when no server answers."""
+        try:
+            reply = LobbyClient(self.session, self.client, self.lobby_timeout_s).request("members")
+        except (ServerGone, ServerError, ValueError):  # no server, or no key to trust it by: nothing verified
+            return {}, set()
+        members = {name: Member(name, m["role"], m["key"]) for name, m in reply["members"].items()}
+        return members, set(reply["zenoh_users"])
+
     def training_runs(self) -> list[dict]:
         """Training runs publishing evaluation episodes now (their liveliness tokens): this client's user's by
-        their name, another user's as ``<user>.<run>``."""
+        their name, another user's as ``<user>.<run>``; ``unverified`` unless the run is a server user's or a
+        member's (whose messages are checked when followed)."""
+        members, zenoh_users = self._run_signers()
         runs = []
         for reply in self.session.liveliness().get(self.training_keys.all_alive, timeout=self.lobby_timeout_s):
             if reply.ok is not None:
@@ -201,7 +216,8 @@ class SpectatorFeed:
                 if found is not None:
                     user, run = found
                     run_id = run if user == self.client.user_name else f"{user}.{run}"
-                    runs.append({"id": run_id, "status": "training", "user": user})
+                    verified = user in zenoh_users or user in members
+                    runs.append({"id": run_id, "status": "training" if verified else "unverified", "user": user})
         return sorted(runs, key=lambda r: r["id"])
 
     def follow(self, kind: str, source_id: Any) -> Follower:
@@ -225,4 +241,8 @@ class SpectatorFeed:
             return follower
         user, _, run = source_id.rpartition(".")
         user = user or self.client.user_name
-        return Follower(self.session, self.training_keys.state(user, run), self.training_keys.events(user, run))
+        follower = Follower(self.session, self.training_keys.state(user, run), self.training_keys.events(user, run))
+        member = self._run_signers()[0].get(user)
+        if member is not None:  # only the member's signed messages show
+            follower.opener = lambda payload, kind: open_run(member, self.server, user, run, payload, MAX_STATE_BYTES)
+        return follower

@@ -10,7 +10,9 @@ Keys (``<server>`` as for the match server, ``<user>`` the trainer's Zenoh user,
     rocketdrl/<server>/u/<user>/train/<run>/events   events, and the episode's final message
 
 Under the trainer's own prefix: with the server's Zenoh users and access control only that user may publish
-there (every user may watch), so nobody else can show a run in its name. The session is a peer that connects to
+there (every user may watch), so nobody else can show a run in its name. A member the server manages
+(``rocketdrl-ma users add``) signs each message with its key instead (``server/members.py``), as Zenoh cannot
+tell members apart; the page shows any other run as unverified. The session is a peer that connects to
 the given endpoints (the match server's, by default), authenticated like a client on the server's machine (the
 password of user ``local``, or of the client's user, from the server's folder), and listens on nothing; with no
 server up it keeps retrying in the background and training never waits for it. Each
@@ -25,7 +27,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rocketdrl_ma.policies.base import Policy
-from rocketdrl_ma.server.protocol import MatchStatus, encode_state, pack
+from rocketdrl_ma.server.members import load_member_key, seal_run
+from rocketdrl_ma.server.protocol import MatchStatus, encode_state, pack, pack_value
 from rocketdrl_ma.validation import check_name
 from rocketdrl_ma.server.settings import DEFAULT_ENDPOINT, ClientSettings, ZenohSettings
 
@@ -92,7 +95,9 @@ class TrainingBroadcast:
         self.run, self.every, self.seed, self.speed = check_run(run), every, seed, float(speed)
         client = client or ClientSettings.from_dict({"server": server, "zenoh": ZenohSettings(
             mode="client", connect=tuple(connect))})
-        self.user, self.keys = client.user_name, TrainingKeys(client.server)
+        self.user, self.server, self.keys = client.user_name, client.server, TrainingKeys(client.server)
+        key_path = client.user_key_path  # a member signs its run's messages
+        self._run_key = load_member_key(key_path) if key_path is not None else None
         self.replay_dir = Path(replay_dir) if replay_dir is not None else None
         # a peer: unlike a client, it opens with no server up and connects once one is
         self.settings = ZenohSettings(mode="peer", listen=(), connect=client.zenoh.connect, tls=client.zenoh.tls,
@@ -150,7 +155,7 @@ class TrainingBroadcast:
             # messages it may wait for a full queue, on this thread, never the trainer's.
             from zenoh import CongestionControl
             self.session.put(self.keys.events(self.user, self.run),
-                             pack({"match": self.run, "decision": decision, "final": True, "info": info,
+                             self._pack({"match": self.run, "decision": decision, "final": True, "info": info,
                                    "status": MatchStatus.STOPPED if self._stop.is_set() else MatchStatus.FINISHED,
                                    "summary": env.rules.summary()}),
                              congestion_control=CongestionControl.BLOCK)
@@ -164,11 +169,17 @@ class TrainingBroadcast:
     def _send(self, env, decision: int, info: dict, slots: dict, done: bool) -> None:
         state = env.game_state
         common = {"match": self.run, "decision": decision, "scoreboard": env.rules.scoreboard(), "done": done}
-        self._state_pub.put(pack({**common, "status": MatchStatus.FINISHED if done else MatchStatus.RUNNING, "info": info,
+        self._state_pub.put(self._pack({**common, "status": MatchStatus.FINISHED if done else MatchStatus.RUNNING, "info": info,
                                   "slots": slots, "state": encode_state(state)}))
         if state.events:
             events = [event.as_dict() for event in state.events]
-            self.session.put(self.keys.events(self.user, self.run), pack({**common, "events": events, "info": info}))
+            self.session.put(self.keys.events(self.user, self.run),
+                             self._pack({**common, "events": events, "info": info}))
+
+    def _pack(self, message: dict) -> bytes:
+        if self._run_key is None:
+            return pack(message)
+        return seal_run(self._run_key, self.server, self.user, self.run, pack_value(message))
 
     def close(self) -> None:
         self._stop.set()

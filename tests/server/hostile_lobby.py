@@ -13,7 +13,11 @@ Attacks:
 - ``invite``: invite ``--victim``'s league bot to ``--match`` (``--slots``), an invitation nobody signed;
 - ``answer-invite``: answer the league's invitations to ``--victim`` in its place, then join the invited
   seats as the victim and hold them (liveliness tokens) until SIGTERM;
-- ``train``: publish a forged training run ``--match`` on ``train/**`` (and under the victim's prefix).
+- ``train``: publish a forged training run ``--match`` on ``train/**`` (and under the victim's prefix); with
+  ``--copy``, also republish each message of the victim's real run ``--match`` with its iteration changed to
+  ``FORGED_ITERATION`` (the signature, if any, kept as it came);
+- ``member``: claim to be ``--victim``, a member the server manages, signing with a key of our own: create a
+  match with the victim's seat, and join ``--match``'s seat ``--slots``.
 """
 from __future__ import annotations
 
@@ -31,12 +35,15 @@ import msgpack
 import zenoh
 
 import yaml
+from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PrivateKey
 from cryptography.hazmat.primitives.asymmetric.x25519 import X25519PrivateKey
 
 from hostile import zenoh_config  # the other hostile client's Zenoh set-up (run as a script beside it)
 
 V = 2
 REQUEST_TAG = b"rocketdrl-ma/2 request\x00"
+MEMBER_TAG = b"rocketdrl-ma/2 member request\x00"
+FORGED_ITERATION = 999_999
 
 
 def pack(message: dict) -> bytes:
@@ -63,15 +70,20 @@ class Lobby:
         self.session, self.server = session, server
 
     def ask(self, user: str, op: str, args: dict, proof: bytes | None = None, nonce: bytes | None = None,
-            timeout_s: float = 5.0) -> dict:
+            timeout_s: float = 5.0, signer: Ed25519PrivateKey | None = None) -> dict:
         raw_args = msgpack.packb(args, use_bin_type=True)
-        message = {"op": op, "nonce": nonce or os.urandom(16), "args": raw_args}
-        if proof is not None:
+        nonce = nonce or os.urandom(16)
+        message = {"op": op, "nonce": nonce, "args": raw_args}
+        if proof is not None or signer is not None:
             challenge = self.ask(user, "challenge", {}).get("challenge")
             if not isinstance(challenge, bytes):
                 return {"ok": False, "error": "no challenge"}
-            text = REQUEST_TAG + b"\x00".join(s.encode() for s in (op, self.server, user)) + b"\x00" + challenge
-            message.update(challenge=challenge, mac=hmac.digest(proof, text + raw_args, hashlib.sha256))
+            names = b"\x00".join(s.encode() for s in (op, self.server, user)) + b"\x00" + challenge
+            message["challenge"] = challenge
+            if proof is not None:
+                message["mac"] = hmac.digest(proof, REQUEST_TAG + names + raw_args, hashlib.sha256)
+            if signer is not None:  # a member's signature, by a key the server never registered
+                message["user_sig"] = signer.sign(MEMBER_TAG + names + nonce + raw_args)
         return self.send(user, pack(message), timeout_s)
 
     def send(self, user: str, payload: bytes, timeout_s: float = 5.0) -> dict:
@@ -192,10 +204,47 @@ def answer_invite(session, lobby: Lobby, args, stop: threading.Event) -> dict:
     return {"invitations": len(invited), "joins": joins, "seats_held": sum(j["ok"] for j in joins)}
 
 
+def member(session, lobby: Lobby, args) -> dict:
+    print("ready", flush=True)
+    own_key = Ed25519PrivateKey.generate()
+    client_key = X25519PrivateKey.generate().public_key().public_bytes_raw()
+    created = lobby.ask(args.victim, "create", {"config": "matches/1v1.yaml", "id": "claimed", "fill": "idle",
+                                                "seats": {"blue_0": args.victim}, "client_key": client_key},
+                        signer=own_key)
+    unsigned = lobby.ask(args.victim, "join", {"match": args.match, "slot": args.slots, "client_key": client_key,
+                                               "name": "mallory"})
+    signed = lobby.ask(args.victim, "join", {"match": args.match, "slot": args.slots, "client_key": client_key,
+                                             "name": "mallory"}, signer=own_key)
+    return {"created": bool(created.get("ok")), "create_error": created.get("error"),
+            "joined": bool(unsigned.get("ok")) or bool(signed.get("ok")),
+            "join_errors": [unsigned.get("error"), signed.get("error")]}
+
+
+def forged_copy(payload: bytes) -> bytes:
+    """The victim's run message with its iteration changed (a signed one keeps its signature)."""
+    message = msgpack.unpackb(payload, raw=False)
+    if isinstance(message.get("body"), bytes):
+        body = msgpack.unpackb(message["body"], raw=False)
+        body.setdefault("info", {})["iteration"] = FORGED_ITERATION
+        return msgpack.packb({**message, "body": msgpack.packb(body, use_bin_type=True)}, use_bin_type=True)
+    message.setdefault("info", {})["iteration"] = FORGED_ITERATION
+    return msgpack.packb(message, use_bin_type=True)
+
+
 def train(session, lobby: Lobby, args, stop: threading.Event) -> dict:
     root = f"rocketdrl/{args.server}"
     keys = [f"{root}/train/{args.match}", f"{root}/u/{args.victim}/train/{args.match}"]
     tokens = [session.liveliness().declare_token(f"{k}/alive") for k in keys]
+    copied = []
+    if args.copy:
+        victim_state = f"{root}/u/{args.victim}/train/{args.match}/state"
+
+        def republish(sample) -> None:
+            if sample.attachment is not None:  # our own copy coming back
+                return
+            session.put(victim_state, forged_copy(sample.payload.to_bytes()), attachment=b"copy")
+            copied.append(1)
+        tokens.append(session.declare_subscriber(victim_state, republish))
     print("ready", flush=True)
     sent = 0
     while True:
@@ -207,12 +256,12 @@ def train(session, lobby: Lobby, args, stop: threading.Event) -> dict:
             break
     for token in tokens:
         token.undeclare()
-    return {"sent": sent}
+    return {"sent": sent, "copied": len(copied)}
 
 
 def main() -> int:
     ap = argparse.ArgumentParser()
-    ap.add_argument("attack", choices=["relay", "seat", "invite", "answer-invite", "train"])
+    ap.add_argument("attack", choices=["relay", "seat", "invite", "answer-invite", "train", "member"])
     ap.add_argument("--server", required=True)
     ap.add_argument("--connect", default=None)
     ap.add_argument("--config", default=None, help="a client YAML: our own user, password and the server's CA")
@@ -221,6 +270,7 @@ def main() -> int:
     ap.add_argument("--slots", default="blue_0")
     ap.add_argument("--wait-s", type=float, default=60.0)
     ap.add_argument("--refill-s", type=float, default=0.5)
+    ap.add_argument("--copy", action="store_true", help="train: also republish the victim's run, altered")
     args = ap.parse_args()
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
@@ -239,6 +289,8 @@ def main() -> int:
             result = invite(session, lobby, args)
         elif args.attack == "answer-invite":
             result = answer_invite(session, lobby, args, stop)
+        elif args.attack == "member":
+            result = member(session, lobby, args)
         else:
             result = train(session, lobby, args, stop)
     finally:

@@ -174,3 +174,16 @@ def test_an_unanswered_inspect_gives_up_after_its_bound(running):
         lobby.inspect("m", retry_s=0)
     with pytest.raises(ValueError, match="inspect_retry_s: expected a finite number of seconds >= 0"):
         running.client(inspect_retry_s=-1)
+
+
+def test_a_flood_under_ever_new_names_is_bounded_by_the_shared_total():
+    """A queryable cannot tell Zenoh sessions apart (a query's source_info is whatever its sender sets), so a
+    flood that claims a fresh name for every request fills a fresh bucket each time: only the total shared by
+    claimable names bounds what the server signs. A user Zenoh authenticated is never held by that total."""
+    from rocketdrl_ma.server.lobby import RateLimiter
+    limiter = RateLimiter(rate_per_s=1e-6, burst=2)  # no refill within the test: counts, not timing
+    allowed = sum(limiter.allow(f"name{i}") for i in range(1000))
+    assert allowed == 20  # ten bursts in all, whatever the number of names
+    assert not limiter.allow("fresh-name")
+    assert limiter.allow("local", claimable=False) and limiter.allow("local", claimable=False)
+    assert not limiter.allow("local", claimable=False)  # its own bucket still holds it

@@ -80,7 +80,9 @@ def test_slow_bot_never_slows_the_others(running, procs):
 
 
 def test_malformed_payloads_are_dropped_and_counted(running, procs):
-    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 30.0}, ready_timeout_s=120)
+    # a deadline the bots meet on a loaded machine: a missed decision means a hostile message cost it one
+    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 30.0}, ready_timeout_s=120,
+                         deadline_ms=1000)
     states = []
     sub = running.session.declare_subscriber(running.server.keys.state("m"), lambda s: states.append(
         open_sealed(running.lobby.server_key, s.payload.to_bytes(), 1 << 24)))
@@ -132,7 +134,9 @@ def test_malformed_payloads_are_dropped_and_counted(running, procs):
 
 
 def test_acting_for_another_slot_with_its_own_secret_or_a_made_up_one_is_rejected(running, procs):
-    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 4.0}, ready_timeout_s=120)
+    # a deadline the bots meet on a loaded machine: what counts is which actions are refused, not latency
+    running.lobby.create("matches/1v1.yaml", "m", overrides={**SHORT, "clock_s": 4.0}, ready_timeout_s=120,
+                         deadline_ms=1000)
     states = []
     sub = running.session.declare_subscriber(running.server.keys.state("m"), lambda s: states.append(
         open_sealed(running.lobby.server_key, s.payload.to_bytes(), 1 << 24)))

@@ -120,6 +120,8 @@ def test_access_settings_name_the_key():
         AccessSettings.from_dict({"users_file": "u.txt", "roles": {"alice": "root"}})
     with pytest.raises(ValueError, match="'server' is the match server's own user"):
         AccessSettings.from_dict({"users_file": "u.txt", "roles": {"server": "admin"}})
+    with pytest.raises(ValueError, match="'members' is the Zenoh user the server's members share"):
+        AccessSettings.from_dict({"roles": {"members": "player"}})
     # roles alone: authenticated, the passwords in <key_dir>/users.txt
     assert AccessSettings.from_dict({"roles": {"alice": "player"}}).enabled
     with pytest.raises(ValueError, match="access.create"):
@@ -177,7 +179,11 @@ def test_generated_acl_denies_by_default_and_gives_each_user_its_own_prefix():
     assert acl["enabled"] and acl["default_permission"] == "deny"
     rules = {r["id"]: r for r in acl["rules"]}
     assert rules["own_alice"]["key_exprs"] == ["rocketdrl/lab/u/alice/**"]
-    assert all(r["permission"] == "allow" for r in acl["rules"])
+    # one deny rule: members (users the server manages) never reach the prefixes of the users Zenoh knows
+    assert [r["id"] for r in acl["rules"] if r["permission"] != "allow"] == ["members_not_users"]
+    assert set(rules["members_not_users"]["key_exprs"]) == {f"rocketdrl/lab/u/{u}/**" for u in
+                                                            ("alice", "ops", "web", "server", "members")}
+    assert rules["members_own"]["key_exprs"] == ["rocketdrl/lab/u/*/**"]
     policies = {p["subjects"][0]: set(p["rules"]) for p in acl["policies"]}
     assert "own_ops" not in policies["user_alice"] and "invite_query" in policies["user_ops"]
     assert "invite_query" not in policies["user_alice"] and policies["user_server"] == {"match_server"}

@@ -121,7 +121,7 @@ function showList(list) {
   }) : [item("none", null, false, () => {})]));
   showPlayChoices(list.play);
   $("list-training").replaceChildren(...(list.training.length ? list.training.map((r) =>
-    item(r.id, "publishing evaluation episodes", isActive("train", r.id), () => watch("train", r.id)))
+    item(r.id, r.status === "unverified" ? "unverified: anyone may publish under this name" : "publishing evaluation episodes", isActive("train", r.id), () => watch("train", r.id)))
     : [item("none", null, false, () => {})]));
   $("list-replays").replaceChildren(...(list.replays.length ? list.replays.map((r) =>
     item(r.id, `${(r.bytes / 1024).toFixed(0)} kB · ${new Date(r.mtime * 1000).toLocaleString()}`,
