@@ -9,7 +9,7 @@ from rocketdrl_ma.physics import constants as C
 from . import events as game_events
 from . import rewards
 from .base import Rules, ball_heading_into_goal
-from .mutators import KickoffMutator
+from .mutators import KickoffMutator, KickoffOrRandomMutator, StateMutator
 from .state import BLUE, ORANGE, TEAM_NAMES, agent_team
 from .team_metrics import TeamMetrics
 
@@ -41,6 +41,11 @@ class Match(Rules):
 
     ``team_size`` cars a side, or ``blue_size`` / ``orange_size`` apart (each 1..4; either one left out takes
     ``team_size``): ``team_size: 2, orange_size: 3`` is a 2v3.
+
+    Training options (off by default, so a match is the game): ``end_on_goal`` ends the episode at the first goal
+    (a round from kickoff to goal); ``no_touch_timeout_s`` truncates it after that many seconds of play without any
+    car in contact with the ball; ``random_start_share`` starts that share of episodes from a random state (cars and
+    ball anywhere, moving: ``RandomStateMutator``) instead of a kickoff.
     """
 
     REWARD_TERMS = {"goal": rewards.GoalScored, "touch": rewards.BallTouched,
@@ -52,6 +57,7 @@ class Match(Rules):
 
     def __init__(self, team_size: int = 1, blue_size: int | None = None, orange_size: int | None = None,
                  clock_s: float = 300.0, kickoff_countdown_s: float = 3.0, overtime_limit_s: float | None = 300.0,
+                 end_on_goal: bool = False, no_touch_timeout_s: float | None = None, random_start_share: float = 0.0,
                  **kwargs):
         team_size = check_team_size("team_size", team_size)
         blue_size = team_size if blue_size is None else check_team_size("blue_size", blue_size)
@@ -68,6 +74,24 @@ class Match(Rules):
         self.clock_length_s = float(clock_s)
         self.kickoff_countdown_s = float(kickoff_countdown_s)
         self.overtime_limit_s = overtime_limit_s
+        if not isinstance(end_on_goal, bool):
+            raise ValueError(f"end_on_goal: must be true or false, got {end_on_goal!r}")
+        if no_touch_timeout_s is not None and (isinstance(no_touch_timeout_s, bool) or not isinstance(
+                no_touch_timeout_s, (int, float)) or not 0.0 < no_touch_timeout_s < float("inf")):
+            raise ValueError(f"no_touch_timeout_s: must be a number of seconds > 0 or null (no timeout), "
+                             f"got {no_touch_timeout_s!r}")
+        if isinstance(random_start_share, bool) or not isinstance(random_start_share, (int, float)) or not (
+                0.0 <= random_start_share <= 1.0):
+            raise ValueError(f"random_start_share: must be a number in [0, 1] (share of episodes starting from a "
+                             f"random state), got {random_start_share!r}")
+        self.end_on_goal = end_on_goal
+        self.no_touch_timeout_s = None if no_touch_timeout_s is None else float(no_touch_timeout_s)
+        self.random_start_share = float(random_start_share)
+
+    def spawn_mutators(self) -> list[StateMutator]:
+        if self.random_start_share == 0.0:
+            return [KickoffMutator()]  # no draw for the choice, so a match replays the games it played before
+        return [KickoffOrRandomMutator(self.random_start_share)]
 
     def on_reset(self, rng: np.random.Generator) -> None:
         self.rng = rng
@@ -78,6 +102,7 @@ class Match(Rules):
         self.ended = False
         self.countdown_s = self.kickoff_countdown_s
         self.decisions = 0
+        self.no_touch_s = 0.0
         self._classified = 0
         self._ball_prev = None
         self.stats = {agent: {"goals": 0, "touches": 0, "shots": 0, "saves": 0} for agent in self.cars}
@@ -107,6 +132,7 @@ class Match(Rules):
         if team is not None:
             self._goal(team)
             return
+        self.no_touch_s = 0.0 if self._touching else self.no_touch_s + dt
         if self.overtime:
             self.overtime_s += dt
         elif self.clock_s > 0.0:
@@ -157,18 +183,21 @@ class Match(Rules):
             self.stats[scorer]["goals"] += 1
         self.team_metrics.on_goal(team, scorer, self.arena.tick_count)
         self.events.append(game_events.Goal(self.arena.tick_count, TEAM_NAMES[team], scorer, own_goal))
-        if self.overtime or (self.clock_s <= 0.0):
+        if self.overtime or self.clock_s <= 0.0 or self.end_on_goal:
             self.ended = True
             return
         KickoffMutator().apply(self.arena, self.cars, self.rng)
         self.arena.clear_events()
         self.last_touch = None
+        self.no_touch_s = 0.0
         self.countdown_s = self.kickoff_countdown_s
 
     def is_terminated(self) -> bool:
         return self.ended
 
     def is_truncated(self) -> bool:
+        if self.no_touch_timeout_s is not None and self.no_touch_s >= self.no_touch_timeout_s:
+            return True
         return self.overtime_limit_s is not None and self.overtime_s >= self.overtime_limit_s
 
     def _scoreboard_fields(self) -> dict:

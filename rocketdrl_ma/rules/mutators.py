@@ -75,3 +75,17 @@ class RandomStateMutator(StateMutator):
         direction = rng.normal(size=3)
         direction /= np.linalg.norm(direction)
         arena.ball.set_state(BallState(pos=ball_pos, vel=direction * rng.uniform(0.0, self.max_ball_speed_uu_s)))
+
+
+class KickoffOrRandomMutator(StateMutator):
+    """A random state (``RandomStateMutator``) with probability ``random_share``, else a kickoff: varied starts
+    for training, with kickoffs kept."""
+
+    def __init__(self, random_share: float):
+        self.random_share = random_share
+
+    def apply(self, arena: Arena, cars: dict[str, Car], rng: np.random.Generator) -> None:
+        if rng.random() < self.random_share:
+            RandomStateMutator().apply(arena, cars, rng)
+        else:
+            KickoffMutator().apply(arena, cars, rng)

@@ -137,3 +137,59 @@ def test_a_ball_resting_on_a_car_is_a_touch_per_landing_not_one_per_tick():
     # it lands, hops once off the hit impulse, lands again and rests there for 100+ ticks of contact
     assert 1 <= touches <= 2
     assert m.last_touch == "blue_0" and m.arena.ball.get_state().pos[2] > 140.0
+
+
+def test_end_on_goal_ends_the_episode_at_the_first_goal_without_a_kickoff():
+    m, engine = _match(team_size=2, end_on_goal=True)
+    _shoot_into_orange_goal(m)
+    engine.step([_idle(m)], 60)
+    assert m.is_terminated() and not m.is_truncated()
+    assert m.summary()["winner"] == "blue" and m.game_state().score == (1, 0)
+    assert m.arena.ball.get_state().pos[1] > C.ARENA_EXTENT_Y  # left in the net, not reset to a kickoff
+
+
+def test_a_goal_without_end_on_goal_plays_on():
+    m, engine = _match(team_size=2)
+    _shoot_into_orange_goal(m)
+    engine.step([_idle(m)], 60)
+    assert not m.is_terminated()
+
+
+def test_no_touch_timeout_truncates_after_that_long_without_contact():
+    m, engine = _match(no_touch_timeout_s=2.0)
+    m.arena.ball.set_state(BallState(pos=np.array([2000.0, 0.0, C.BALL_REST_Z]), vel=np.zeros(3)))
+    engine.step([_idle(m)], 230)  # 1.92 s of idle cars far from the ball
+    assert not m.is_truncated()
+    engine.step([_idle(m)], 12)  # 2.02 s
+    assert m.is_truncated() and not m.is_terminated() and m.summary()["winner"] is None
+
+
+def test_a_touch_restarts_the_no_touch_timeout():
+    m, engine = _match(no_touch_timeout_s=2.0)
+    engine.step([_idle(m)], 180)  # 1.5 s
+    car = m.cars["blue_0"].get_state()
+    m.arena.ball.set_state(BallState(pos=car.pos + np.array([0.0, 0.0, 150.0]), vel=np.array([0.0, 0.0, -300.0])))
+    engine.step([_idle(m)], 60)  # the ball lands on the car: a touch at 1.5-2 s
+    assert m.stats["blue_0"]["touches"] >= 1
+    engine.step([_idle(m)], 120)
+    assert not m.is_truncated()
+
+
+def test_random_start_share_one_starts_away_from_the_kickoff_and_zero_replays_the_kickoff():
+    kickoff, _ = _match(team_size=2)
+    random_start, _ = _match(team_size=2, random_start_share=1.0)
+    assert np.allclose(kickoff.arena.ball.get_state().pos, [0, 0, C.BALL_REST_Z])
+    assert not np.allclose(random_start.arena.ball.get_state().pos[:2], [0, 0])
+    replay, _ = _match(team_size=2, random_start_share=0.0)
+    for agent in kickoff.cars:
+        np.testing.assert_array_equal(replay.cars[agent].get_state().pos, kickoff.cars[agent].get_state().pos)
+
+
+@pytest.mark.parametrize("key, value, words", [
+    ("end_on_goal", 1, "end_on_goal: must be true or false"),
+    ("no_touch_timeout_s", 0.0, "no_touch_timeout_s: must be a number of seconds > 0"),
+    ("no_touch_timeout_s", "10", "no_touch_timeout_s: must be a number of seconds > 0"),
+    ("random_start_share", 1.5, "random_start_share: must be a number in [0, 1]")])
+def test_training_options_name_the_field(key, value, words):
+    with pytest.raises(ValueError, match=words.replace("[", r"\[").replace("]", r"\]")):
+        Match(**{key: value})
