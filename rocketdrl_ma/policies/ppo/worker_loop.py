@@ -1,8 +1,8 @@
 """The lean rollout loop: a worker steps its games (``rollout.WorkerGames``) with the rollout policy on numpy arrays
 and writes each decision straight into shared-memory buffers, with no ``TensorDict`` and no spec check per step.
 
-torchrl's collector around ``RolloutEnv`` cost about a third of a Penalty worker's time (a tensordict built, checked
-and moved between root and ``next`` every step, for a step of about 200 µs); this loop does what it did with the
+torchrl's collector around ``RolloutEnv`` builds, checks and moves a tensordict between root and ``next`` every
+step, a large share of a cheap game's step (docs/experiments/engineering.md); this loop does what it did with the
 same calls in the same order, so one seed gives the very batch torchrl's in-process collector gives
 (``tests/policies/test_worker_loop.py``). The learner side keeps torchrl's GAE, loss and the rest.
 
