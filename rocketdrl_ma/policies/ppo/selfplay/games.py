@@ -44,8 +44,8 @@ class SelfPlayGames:
     def __init__(self, cfg: TrainConfig, n_copies: int, first_copy: int = 0):
         self.cfg, self.sp = cfg, cfg.selfplay
         overrides = {**cfg.env_overrides, "info_format": "full"}
-        self.vec = VectorEnv(cfg.env, n_arenas=n_copies, autoreset=False, **overrides)
-        self.envs = self.vec.lanes
+        self.vec = VectorEnv(cfg.env, n_games=n_copies, autoreset=False, **overrides)
+        self.envs = self.vec.games
         first = self.envs[0]
         self.agents = list(self.vec.possible_agents)
         self.team_agents = {t: [a for a in self.agents if a.startswith(t)] for t in TEAMS}
@@ -116,7 +116,7 @@ class SelfPlayGames:
     def reset_copies(self, ended: np.ndarray, obs: np.ndarray | None = None) -> np.ndarray:
         """Start the next episode of the copies flagged in ``ended``; every learner row's observation (``obs``,
         the rows' last observations, is not needed: the games hold every car's)."""
-        new_obs, _ = self.vec.reset_arenas(np.asarray(ended, bool))
+        new_obs, _ = self.vec.reset_games(np.asarray(ended, bool))
         for i in np.flatnonzero(ended):
             self._obs[i] = new_obs[i]
             self._start_episode(int(i))
