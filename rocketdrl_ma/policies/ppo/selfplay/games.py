@@ -30,7 +30,7 @@ SELF = 0  # the opponent index of the learner itself
 
 
 @dataclass
-class MatchResult:
+class EpisodeOutcome:
     """A finished episode of one copy, for the learner's PFSP bookkeeping."""
 
     copy: int
@@ -131,7 +131,7 @@ class SelfPlayGames:
         return np.asarray(labels)
 
     def step(self, learner_actions: np.ndarray,
-             opponent_actions: np.ndarray) -> tuple[StepResult, list[MatchResult], np.ndarray]:
+             opponent_actions: np.ndarray) -> tuple[StepResult, list[EpisodeOutcome], np.ndarray]:
         """One decision. ``opponent_actions`` [rows, ...] are used for copies whose opponent is a network (the
         learner itself or a snapshot); scripted opponents act here. Ended copies keep their final observation
         until ``reset_copies``. Also returns [copies, 2]: goals for and against the learner's team."""
@@ -154,7 +154,7 @@ class SelfPlayGames:
         reward = np.zeros(self.n_rows, np.float32)
         shaping = np.zeros(self.n_rows, np.float32)
         episodes: list[Episode] = []
-        results: list[MatchResult] = []
+        results: list[EpisodeOutcome] = []
         goals = np.zeros((len(self.envs), 2), np.int64)
         ended = term | trunc
         for i in range(len(self.envs)):
@@ -172,7 +172,7 @@ class SelfPlayGames:
                 points = 0.5 if winner is None else float(winner == team)
                 metrics = (team_log_vector(summary["team"][team]) if "team" in summary
                            else [float("nan")] * len(TEAM_LOG_METRICS))
-                results.append(MatchResult(i, self.opponent[i], self.generation[i], points, metrics))
+                results.append(EpisodeOutcome(i, self.opponent[i], self.generation[i], points, metrics))
                 for k in range(self.team_size):
                     row = rows.start + k
                     episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
