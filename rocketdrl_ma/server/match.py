@@ -12,6 +12,7 @@ import threading
 import time
 import traceback
 import uuid
+from collections import Counter
 from typing import Any, Callable
 
 import numpy as np
@@ -105,7 +106,8 @@ class MatchRunner:
         return self.inbox.decision
 
     @property
-    def rejected(self):
+    def rejected(self) -> Counter:
+        """Refused actions by reason (the inbox's)."""
         return self.inbox.rejected
 
     # ------------------------------------------------------------------------------------------ lobby side
