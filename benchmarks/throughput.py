@@ -60,7 +60,7 @@ def _single(team_size: int, seconds: float, clock: str) -> float:
 def _vector(team_size: int, n_arenas: int, seconds: float, clock: str) -> float:
     from rocketdrl_ma.env.vector_env import VectorEnv
 
-    env = VectorEnv(_config(team_size), n_arenas=n_arenas, kickoff_countdown_s=0.0, tick_skip=TICKS_PER_DECISION)
+    env = VectorEnv(_config(team_size), n_games=n_arenas, kickoff_countdown_s=0.0, tick_skip=TICKS_PER_DECISION)
     env.reset(seed=0)
     space = env.action_space
     rng = np.random.default_rng(0)

@@ -11,7 +11,8 @@ from __future__ import annotations
 import dataclasses
 import inspect
 from pathlib import Path
-from typing import Annotated, Any
+from collections.abc import Mapping
+from typing import Annotated, Any, TypeVar
 
 import yaml
 
@@ -20,8 +21,10 @@ from rocketdrl_ma.physics.arena_shape import arena_shape_index
 from rocketdrl_ma.rules import GAME_MODES
 from rocketdrl_ma.rules.match import check_team_size
 from rocketdrl_ma.rules.rewards import check_weights
-from rocketdrl_ma.validation import Check, OneOf, Range, check_number, check_value, field_types, reject_unknown
+from rocketdrl_ma.validation import (Check, OneOf, Range, check_number, check_value, field_types, load_dataclass,
+                                     reject_unknown)
 
+T = TypeVar("T")
 PACKAGE_DIR = Path(__file__).resolve().parent
 REPO_ROOT = PACKAGE_DIR.parent
 #: The top-level folders that ship with the package: game, server, training and league configs, and the trained
@@ -103,6 +106,21 @@ def load_yaml_file(path: str | Path, what: str = "config") -> Any:
         raise ValueError(f"{what}: YAML syntax error in {where}: {problem or e}") from None
 
 
+def load_yaml_mapping(path: str | Path, what: str, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The mapping a config YAML holds (the file as given, else the shipped one of that name; empty: ``{}``),
+    ``overrides`` replacing its top-level keys; anything but a mapping is a ValueError naming ``what``."""
+    raw = load_yaml_file(resolve_shipped_path(path, what), what) or {}
+    if not isinstance(raw, dict):
+        raise ValueError(f"{what}: {path} must hold a mapping of keys to values")
+    return {**raw, **(overrides or {})}
+
+
+def load_yaml_dataclass(cls: type[T], path: str | Path, what: str, overrides: Mapping[str, Any] | None = None) -> T:
+    """A config dataclass read from a YAML file (``load_yaml_mapping``) by ``validation.load_dataclass``: every error
+    names the key and what is allowed."""
+    return load_dataclass(cls, load_yaml_mapping(path, what, overrides), what)
+
+
 def shipped_files(suffixes: tuple[str, ...] = (".yaml",)) -> list[str]:
     """The shipped files with these suffixes, as the names that resolve to them (``matches/1v1.yaml``)."""
     root = shipped_root()
@@ -158,9 +176,7 @@ def load_config(config: str | Path | dict | None = None, overrides: dict | None 
         raise ValueError(f"config: expected a YAML path (e.g. 'matches/1v1.yaml'), a dict or None, got "
                          f"{type(config).__name__} {config!r}")
     else:
-        raw = load_yaml_file(resolve_config_path(config)) or {}
-        if not isinstance(raw, dict):
-            raise ValueError(f"config: {config} must hold a mapping of keys to values")
+        raw = load_yaml_mapping(config, "config")
     for key, value in (overrides or {}).items():
         if isinstance(value, dict) and isinstance(raw.get(key), dict):
             raw[key] = {**raw[key], **value}

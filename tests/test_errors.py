@@ -57,7 +57,7 @@ def test_reset_seeds_must_be_ints_from_zero(env, seed):
     with pytest.raises(ValueError, match=refused):
         env.reset(seed=seed)
     with pytest.raises(ValueError, match=refused):
-        VectorEnv("matches/1v1.yaml", n_arenas=1).reset(seed=seed)
+        VectorEnv("matches/1v1.yaml", n_games=1).reset(seed=seed)
     env.step(zeros(env))  # the episode under way goes on
 
 

@@ -1,8 +1,9 @@
 """Names that were renamed: configs, checkpoints and code that still use an old one keep working, with a warning
 that names the new one.
 
-The old names came from the predecessor project this one started from ("the seed"); they said where the sensors
-and actions came from, the new ones say what they are.
+The old sensor and action names came from the predecessor project this one started from ("the seed"); they said where
+the sensors and actions came from, the new ones say what they are. A game of a ``VectorEnv`` was an arena or a lane;
+it is a game everywhere now.
 """
 from __future__ import annotations
 
@@ -43,3 +44,21 @@ def renamed_class(module: str, name: str, namespace: dict) -> type:
         raise AttributeError(f"module {module!r} has no attribute {name!r}")
     warnings.warn(f"{module}.{name} is now {new}", DeprecationWarning, stacklevel=3)
     return namespace[new]
+
+
+def renamed_keyword(owner: str, given: dict, old: str, new: str, value):
+    """``value`` of keyword ``new``, or of ``old`` if the caller passed the old name (popped from ``given``, with a
+    DeprecationWarning naming the new one)."""
+    if old not in given:
+        return value
+    warnings.warn(f"{owner}({old}=...) is now {owner}({new}=...)", DeprecationWarning, stacklevel=3)
+    return given.pop(old)
+
+
+def renamed_attribute(owner: str, old: str, new: str) -> property:
+    """A read-only alias ``old`` of attribute (or method) ``new`` of class ``owner``: each use warns."""
+    def alias(self):
+        warnings.warn(f"{owner}.{old} is now {owner}.{new}", DeprecationWarning, stacklevel=2)
+        return getattr(self, new)
+    alias.__doc__ = f"Deprecated: {new}."
+    return property(alias)

@@ -1,10 +1,10 @@
-"""torchrl's face of the vectorised env: an ``EnvBase`` whose batch is the arenas of one ``VectorEnv``.
+"""torchrl's face of the vectorised env: an ``EnvBase`` whose batch is the games of one ``VectorEnv``.
 
-Keys (``n`` arenas, ``m`` agents in ``possible_agents`` order, all in one group ``agents``):
+Keys (``n`` games, ``m`` agents in ``possible_agents`` order, all in one group ``agents``):
 ``("agents", "observation")`` ``[n, m, obs_dim]``, ``("agents", "action")`` ``[n, m, *action_shape]``,
 ``("next", "agents", "reward")`` ``[n, m, 1]``, ``state`` ``[n, state_dim]`` (the global vector for a
-centralised critic), and ``done`` / ``terminated`` / ``truncated`` ``[n, 1]``: every agent of an arena ends
-together. An arena whose game ended is reset by torchrl's partial reset (``_reset`` mask), as collectors do.
+centralised critic), and ``done`` / ``terminated`` / ``truncated`` ``[n, 1]``: every agent of a game ends
+together. A game that ended is reset by torchrl's partial reset (``_reset`` mask), as collectors do.
 
 The env pickles (its ``VectorEnv`` copies in its state), so a multi-process collector may be given env objects as
 well as factories: each worker steps its own copy.
@@ -22,6 +22,7 @@ from torchrl.data import Bounded, Categorical, Composite, Unbounded
 from torchrl.envs import EnvBase
 
 from .parallel_env import check_seed
+from .renamed import renamed_keyword
 from .vector_env import VectorEnv
 
 GROUP = "agents"
@@ -38,17 +39,18 @@ def _action_spec(space: spaces.Space, shape: tuple[int, int]):
 
 
 class RocketDRLTorchEnv(EnvBase):
-    """``RocketDRLTorchEnv("matches/2v2.yaml", n_arenas=16, kickoff_countdown_s=0.0)``; keyword overrides as in
-    ``rocketdrl_ma.parallel_env``."""
+    """``RocketDRLTorchEnv("matches/2v2.yaml", n_games=16, kickoff_countdown_s=0.0)``; keyword overrides as in
+    ``rocketdrl_ma.parallel_env`` (``n_arenas``, the old name of ``n_games``, still works with a warning)."""
 
-    def __init__(self, config: str | Path | dict | None = "matches/1v1.yaml", n_arenas: int = 16,
+    def __init__(self, config: str | Path | dict | None = "matches/1v1.yaml", n_games: int = 16,
                  device: str | torch.device = "cpu", **overrides: Any):
-        self.vec = VectorEnv(config, n_arenas=n_arenas, autoreset=False, **overrides)
-        super().__init__(batch_size=torch.Size([n_arenas]), device=device)
-        n, m = n_arenas, self.vec.n_agents
+        n_games = renamed_keyword("RocketDRLTorchEnv", overrides, "n_arenas", "n_games", n_games)
+        self.vec = VectorEnv(config, n_games=n_games, autoreset=False, **overrides)
+        super().__init__(batch_size=torch.Size([n_games]), device=device)
+        n, m = n_games, self.vec.n_agents
         self.possible_agents = self.vec.possible_agents
         obs_space = self.vec.observation_space
-        state_dim = self.vec.lanes[0].state_space.shape[0]
+        state_dim = self.vec.games[0].state_space.shape[0]
         self.full_observation_spec = Composite(
             {GROUP: Composite(observation=Bounded(
                 low=torch.as_tensor(np.broadcast_to(obs_space.low, (n, m) + obs_space.shape).copy()),
@@ -68,7 +70,7 @@ class RocketDRLTorchEnv(EnvBase):
 
     def _set_seed(self, seed: int | None) -> None:
         self._next_seed = check_seed(seed)
-        self._started = False  # the next reset restarts every arena from this seed
+        self._started = False  # the next reset restarts every game from this seed
 
     def _observation(self, obs: np.ndarray) -> dict:
         agents = TensorDict({"observation": torch.as_tensor(obs, device=self.device)}, batch_size=obs.shape[:2],
@@ -83,7 +85,7 @@ class RocketDRLTorchEnv(EnvBase):
             obs, _ = self.vec.reset(seed=self._next_seed)
             self._next_seed, self._started = None, True
         else:
-            obs, _ = self.vec.reset_arenas(mask)
+            obs, _ = self.vec.reset_games(mask)
         n = self.batch_size[0]
         false = torch.zeros((n, 1), dtype=torch.bool, device=self.device)
         return TensorDict({**self._observation(obs), "done": false, "terminated": false.clone(),

@@ -3,7 +3,7 @@
 A kernel compiles once for each set of argument types it meets, so warming up steps briefly what the product
 steps: a lone ``Arena`` with a staged bump (the bump's curve lookup runs from Python only when two cars meet), and
 every shipped match and minigame config, 1v1 to 4v4, barriers and ray sensors, as a ``RocketDRLParallelEnv`` and as
-a ``VectorEnv`` of two arenas (an ``ArenaBatch``), in every arena shape. Leagues, the match server, training and the page play these same
+a ``VectorEnv`` of two games (an ``ArenaBatch``), in every arena shape. Leagues, the match server, training and the page play these same
 envs, so afterwards no process compiles a kernel.
 """
 from __future__ import annotations
@@ -22,7 +22,7 @@ from .vector_env import VectorEnv
 
 GAME_FOLDERS = ("matches", "minigames")
 DECISIONS = 4
-VECTOR_ARENAS = 2
+VECTOR_GAMES = 2
 BUMP_MAX_TICKS = 60
 
 
@@ -65,13 +65,13 @@ def _parallel_env(config: str, arena_shape: str) -> None:
 
 
 def _vector_env(config: str, arena_shape: str) -> None:
-    env = VectorEnv(config, n_arenas=VECTOR_ARENAS, arena_shape=arena_shape)
+    env = VectorEnv(config, n_games=VECTOR_GAMES, arena_shape=arena_shape)
     try:
         env.reset(seed=0)
         env.action_space.seed(0)
         for _ in range(DECISIONS):
             env.step(np.stack([np.stack([env.action_space.sample() for _ in range(env.n_agents)])
-                               for _ in range(VECTOR_ARENAS)]))
+                               for _ in range(VECTOR_GAMES)]))
     finally:
         env.close()
 

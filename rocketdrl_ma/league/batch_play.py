@@ -2,7 +2,7 @@
 go through one forward of it (``policies.ppo.batched``), scripted bots keep one instance per car, and each match
 steps its own env. A finished match hands its place to the next one of the schedule.
 
-Each match keeps its own PyBullet world (a lone env's, as ``play_local`` plays it): the arenas of one ``VectorEnv``
+Each match keeps its own PyBullet world (a lone env's, as ``play_local`` plays it): the games of one ``VectorEnv``
 share a world and match a lone arena only up to float rounding, so a match's result there would depend on its
 neighbours. Here it does not: every match comes out bit for bit as ``play_local`` plays it alone.
 """

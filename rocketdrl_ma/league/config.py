@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
-from rocketdrl_ma.config import load_config, load_yaml_file, resolve_shipped_path
+from rocketdrl_ma.config import load_config, load_yaml_dataclass
 from rocketdrl_ma.validation import Check, Expect, Name, OneOf, Range, load_dataclass
 
 FORMATS = ("round_robin", "per_pair")
@@ -174,7 +174,4 @@ def validate_league_config(raw: Any) -> LeagueConfig:
 
 def load_league_config(path: str | Path, overrides: dict | None = None) -> LeagueConfig:
     """A league YAML (as given, else the shipped one); ``overrides`` replace its top-level keys."""
-    raw = load_yaml_file(resolve_shipped_path(path, "league config"), "league config") or {}
-    if not isinstance(raw, dict):
-        raise ValueError(f"league config: {path} must hold a mapping of keys to values")
-    return validate_league_config({**raw, **(overrides or {})})
+    return load_yaml_dataclass(LeagueConfig, path, "league config", overrides)

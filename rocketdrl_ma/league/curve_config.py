@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
-from rocketdrl_ma.config import load_yaml_file, resolve_shipped_path
+from rocketdrl_ma.config import load_yaml_dataclass
 from rocketdrl_ma.validation import Expect, Name, Range, load_dataclass
 
 from .config import LeagueConfig, PolicySpec, validate_league_config
@@ -84,7 +84,4 @@ def validate_curve_config(raw: Any) -> CurveConfig:
 
 def load_curve_config(path: str | Path, overrides: dict | None = None) -> CurveConfig:
     """A curve YAML (as given, else the shipped one); ``overrides`` replace its top-level keys."""
-    raw = load_yaml_file(resolve_shipped_path(path, "curve config"), "curve config") or {}
-    if not isinstance(raw, dict):
-        raise ValueError(f"curve config: {path} must hold a mapping of keys to values")
-    return validate_curve_config({**raw, **(overrides or {})})
+    return load_yaml_dataclass(CurveConfig, path, "curve config", overrides)

@@ -25,7 +25,7 @@ from rocketdrl_ma.physics import CarControls, CarState
 from rocketdrl_ma.physics import constants as C
 from rocketdrl_ma.rules.state import GameState
 
-from .minigame_bots import TeamView, _unit, approach, heading_error
+from .minigame_bots import CarView, _unit, approach, heading_error
 from .scripted import ScriptedBot, team_frame
 
 GRAVITY = np.array([0.0, 0.0, C.GRAVITY_Z])
@@ -57,7 +57,7 @@ class AerialShooter(ScriptedBot):
     ROLL_KP, ROLL_KD = 2.0, 0.3
 
     def controls(self, agent: str, state: GameState) -> CarControls:
-        view = TeamView.of(agent, state)
+        view = CarView.of(agent, state)
         if view is None:
             return CarControls()
         car = state.cars[agent]
@@ -68,7 +68,7 @@ class AerialShooter(ScriptedBot):
             return self.ground(view, vel, release_in_s)
         return self.air(car, view, vel, release_in_s)
 
-    def contacts(self, view: TeamView, times_s: np.ndarray, release_in_s: float | None) -> np.ndarray:
+    def contacts(self, view: CarView, times_s: np.ndarray, release_in_s: float | None) -> np.ndarray:
         """The contact point at each of ``times_s`` (rows): the ball hanging until its release (``release_in_s``
         None: already free), then falling (the floor ignored), less the reach along its line to ``AIM``."""
         t = times_s[:, None]
@@ -80,7 +80,7 @@ class AerialShooter(ScriptedBot):
         to_aim = self.AIM - ball
         return ball - to_aim / np.linalg.norm(to_aim, axis=1, keepdims=True) * self.REACH_UU
 
-    def plan(self, pos: np.ndarray, vel: np.ndarray, view: TeamView, release_in_s: float | None,
+    def plan(self, pos: np.ndarray, vel: np.ndarray, view: CarView, release_in_s: float | None,
              accel_uu_s2: float) -> tuple[float, np.ndarray, bool]:
         """(T, thrust, reachable): the first plan time at which the thrust that meets the contact point is within
         ``accel_uu_s2``; if none is, the time that needs the least thrust, and ``reachable`` False."""
@@ -91,7 +91,7 @@ class AerialShooter(ScriptedBot):
         k = int(within[0]) if within.size else int(np.argmin(norm))
         return float(self.PLAN_TIMES_S[k]), thrust[k], bool(within.size)
 
-    def ground(self, view: TeamView, vel: np.ndarray, release_in_s: float | None) -> CarControls:
+    def ground(self, view: CarView, vel: np.ndarray, release_in_s: float | None) -> CarControls:
         """Take off when the aerial is in reach and the car faces the contact point; else drive onto the shot's
         line behind it at full speed."""
         lifted = vel + np.array([0.0, 0.0, self.JUMP_LIFT_UU_S])
@@ -109,7 +109,7 @@ class AerialShooter(ScriptedBot):
         return CarControls(throttle=1.0 if fast else 0.0, steer=float(np.clip(3.0 * angle, -1.0, 1.0)),
                            boost=fast and abs(angle) < 0.3, handbrake=1.3 < abs(angle) < 2.4 and view.speed > 400.0)
 
-    def air(self, car: CarState, view: TeamView, vel: np.ndarray, release_in_s: float | None) -> CarControls:
+    def air(self, car: CarState, view: CarView, vel: np.ndarray, release_in_s: float | None) -> CarControls:
         """Nose along the plan's thrust, boost while it is on it; the jump's hold and the double jump first."""
         _, thrust, _ = self.plan(view.pos, vel, view, release_in_s, self.PLAN_ACCEL_UU_S2)
         pitch, yaw, roll = self.orient(car, view.rot, thrust)

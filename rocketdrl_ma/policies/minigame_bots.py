@@ -71,7 +71,7 @@ def _team_rot(agent: str, rot: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class TeamView:
+class CarView:
     """One car and the ball in the car's team frame (every bot attacks +y): positions and velocities (uu,
     uu/s), the car's rotation matrix and its forward speed."""
     pos: np.ndarray
@@ -81,13 +81,13 @@ class TeamView:
     ball_vel: np.ndarray
 
     @staticmethod
-    def of(agent: str, state: GameState) -> TeamView | None:
+    def of(agent: str, state: GameState) -> CarView | None:
         """``agent``'s view; None while its car is demolished."""
         car = state.cars[agent]
         if car.is_demoed:
             return None
         rot = _team_rot(agent, car.rot_mat)
-        return TeamView(team_frame(agent, car.pos), rot, float(team_frame(agent, car.vel) @ rot[:, 0]),
+        return CarView(team_frame(agent, car.pos), rot, float(team_frame(agent, car.vel) @ rot[:, 0]),
                         team_frame(agent, state.ball.pos), team_frame(agent, state.ball.vel))
 
 
@@ -219,7 +219,7 @@ class BarrierShooter(ScriptedBot):
     SETTLE_UU = 300.0              # the car is at the touch speed this far before the touch
 
     def controls(self, agent: str, state: GameState) -> CarControls:
-        view = TeamView.of(agent, state)
+        view = CarView.of(agent, state)
         if view is None:
             return CarControls()
         pos, rot, speed, ball, ball_vel = view.pos, view.rot, view.speed, view.ball, view.ball_vel

@@ -11,10 +11,10 @@ from dataclasses import dataclass, fields, replace
 from enum import Enum
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any, Literal
 
 from rocketdrl_ma.config import load_yaml_file
-from rocketdrl_ma.validation import as_mapping, check_choice, check_int, check_number
+from rocketdrl_ma.validation import Check, Expect, Range, check_choice, load_dataclass
 
 #: the team sizes with tables of their own; a single car has no team-mate to rotate with
 TEAM_SIZES = (2, 3, 4)
@@ -30,6 +30,40 @@ class KickoffLane(Enum):
 
 #: the lanes of a team's first and second kickoff taker
 Layout = tuple[KickoffLane, KickoffLane]
+LANE_NAMES = [lane.value for lane in KickoffLane]
+LaneName = Literal["diagonal", "off_centre", "back"]
+TeamSize = Literal[2, 3, 4]
+
+
+def _lane_pair(field: str, pair: tuple) -> Layout:
+    if len(pair) != 2:
+        raise ValueError(f"{field}: expected [first lane, second lane] of {LANE_NAMES}, got {list(pair)!r}")
+    return KickoffLane(pair[0]), KickoffLane(pair[1])
+
+
+def _aims_by_layout(_: str, aims: dict) -> dict[Layout, float]:
+    return {(KickoffLane(first), KickoffLane(second)): uu for first, row in aims.items() for second, uu in row.items()}
+
+
+def _layout_set(_: str, layouts: tuple) -> frozenset[Layout]:
+    return frozenset(layouts)
+
+
+def _every_team_size(field: str, by_size: dict) -> dict:
+    if sorted(by_size) != list(TEAM_SIZES):
+        raise ValueError(f"{field}: expected one entry for each team size {list(TEAM_SIZES)}, got {list(by_size)}")
+    return {size: by_size[size] for size in TEAM_SIZES}
+
+
+def _detour(field: str, pair: tuple) -> tuple[float, float]:
+    if len(pair) != 2:
+        raise ValueError(f"{field}: expected [small pad uu, big pad uu], got {list(pair)!r}")
+    return pair
+
+
+LanePair = Annotated[tuple[LaneName, ...], Check(_lane_pair)]
+Detour = Annotated[tuple[Annotated[float, Range(0.0)], ...], Check(_detour),
+                   Expect("[small pad uu, big pad uu]")]
 
 
 @dataclass(frozen=True)
@@ -37,24 +71,27 @@ class KickoffTable:
     """One team size's kickoff: how far beside the ball the second taker aims by layout (uu along x, towards its own
     side of the long axis when positive; a layout not listed aims at the ball's centre), and the layouts where the
     nearest car goes alone and the other stays back. The lanes are read every decision and a car staying back drives
-    into the back lane, so ``alone`` names the layouts a kickoff turns into on the way too."""
-    second_aim_uu: dict[Layout, float]
-    alone: frozenset[Layout]
+    into the back lane, so ``alone`` names the layouts a kickoff turns into on the way too. The annotations say what
+    the file holds (``{first lane: {second lane: uu}}``, a list of lane pairs); read, they are keyed by ``Layout``."""
+    second_aim_uu: Annotated[dict[LaneName, dict[LaneName, float]], Check(_aims_by_layout)]
+    alone: Annotated[tuple[LanePair, ...], Check(_layout_set),
+                     Expect("a list of [first lane, second lane] pairs")]
 
 
 @dataclass(frozen=True)
 class RotatorTuning:
-    """The settings ``rotation.py`` plays by, one field per key of the tuning file. Its dicts are not changed in
-    place: ``dataclasses.replace`` (or ``with_kickoff_table``) makes a variant."""
-    rotating_cars: int             # cars that rotate outside kickoffs; the team's others are pressers
+    """The settings ``rotation.py`` plays by, one field per key of the tuning file (every key required). Its dicts
+    are not changed in place: ``dataclasses.replace`` (or ``with_kickoff_table``) makes a variant."""
+    rotating_cars: Annotated[int, Range(1, TEAM_SIZES[-1])]  # cars that rotate outside kickoffs; the others press
     wrong_side_cost_s: float       # the first man's pick: a car upfield of the ball pays this for turning round
     keep_role_bonus_s: float       # the last toucher near the ball keeps the first man's role at this head start
     follow_up_goal_side_uu: float  # the follow-up car is at least this much nearer its own goal than the ball
     last_behind_pair_uu: float     # the last man's distance behind the ball with one other rotating car
     last_man_line_y_uu: float      # with pressers on the team, the last man goes no further up (team frame y)
-    low_boost: float               # below this much boost a car coming back takes a pad on the way
-    detour_uu: dict[int, tuple[float, float]]  # by team size: the detour a small pad, a big pad is worth
-    kickoff: dict[int, KickoffTable]           # by team size
+    low_boost: Annotated[float, Range(0.0, 100.0)]  # below this much boost a car coming back takes a pad on the way
+    #: by team size: the detour a small pad, a big pad is worth
+    detour_uu: Annotated[dict[TeamSize, Detour], Check(_every_team_size)]
+    kickoff: Annotated[dict[TeamSize, KickoffTable], Check(_every_team_size)]  # by team size
 
     def detour_for(self, team_size: int) -> tuple[float, float]:
         """``detour_uu`` of a match with ``team_size`` cars a side (1v1 takes 2v2's)."""
@@ -62,7 +99,6 @@ class RotatorTuning:
 
 
 SHIPPED_FILE = "data/rotator_tuning.yaml"  # inside this package
-LANE_NAMES = [lane.value for lane in KickoffLane]
 
 
 @functools.cache
@@ -79,61 +115,11 @@ def read_tuning(path: str | Path) -> RotatorTuning:
 
 def parse_tuning(data: Any, source: str = "rotator tuning") -> RotatorTuning:
     """``data`` (a mapping with every field of ``RotatorTuning``, as in ``format_tuning``'s text) checked."""
-    given = _every_key(source, data, [f.name for f in fields(RotatorTuning)])
-    numbers = {name: check_number(f"{source}: {name}", given[name]) for name in
-               ("wrong_side_cost_s", "keep_role_bonus_s", "follow_up_goal_side_uu", "last_behind_pair_uu",
-                "last_man_line_y_uu")}
-    detours = _by_team_size(f"{source}: detour_uu", given["detour_uu"])
-    kickoff = _by_team_size(f"{source}: kickoff", given["kickoff"])
-    return RotatorTuning(
-        rotating_cars=check_int(f"{source}: rotating_cars", given["rotating_cars"], 1, TEAM_SIZES[-1]),
-        low_boost=check_number(f"{source}: low_boost", given["low_boost"], 0.0, 100.0),
-        detour_uu={size: _detour(f"{source}: detour_uu.{size}", value) for size, value in detours.items()},
-        kickoff={size: parse_kickoff_table(f"{source}: kickoff.{size}", value) for size, value in kickoff.items()},
-        **numbers)
+    return load_dataclass(RotatorTuning, data, source, f"{source}: ")
 
 
 def parse_kickoff_table(field: str, data: Any) -> KickoffTable:
-    table = _every_key(field, data, ["second_aim_uu", "alone"])
-    aims = {}
-    for first, seconds in as_mapping(f"{field}.second_aim_uu", table["second_aim_uu"]).items():
-        for second, aside in as_mapping(f"{field}.second_aim_uu.{first}", seconds).items():
-            where = f"{field}.second_aim_uu.{first}.{second}"
-            aims[_lane(f"{field}.second_aim_uu", first), _lane(where, second)] = check_number(where, aside)
-    alone = table["alone"]
-    if not isinstance(alone, list):
-        raise ValueError(f"{field}.alone: expected a list of [first lane, second lane] pairs, got {alone!r}")
-    layouts = set()
-    for k, pair in enumerate(alone):
-        if not (isinstance(pair, list) and len(pair) == 2):
-            raise ValueError(f"{field}.alone[{k}]: expected [first lane, second lane] of {LANE_NAMES}, got {pair!r}")
-        layouts.add((_lane(f"{field}.alone[{k}]", pair[0]), _lane(f"{field}.alone[{k}]", pair[1])))
-    return KickoffTable(aims, frozenset(layouts))
-
-
-def _every_key(field: str, data: Any, names: list[str]) -> dict:
-    given = as_mapping(field, data, names)
-    missing = [name for name in names if name not in given]
-    if missing:
-        raise ValueError(f"{field}: missing {missing}; every one of {names} is required")
-    return given
-
-
-def _lane(field: str, name: Any) -> KickoffLane:
-    return KickoffLane(check_choice(field, name, LANE_NAMES))
-
-
-def _by_team_size(field: str, data: Any) -> dict[int, Any]:
-    given = as_mapping(field, data)
-    if sorted(given, key=str) != list(TEAM_SIZES):
-        raise ValueError(f"{field}: expected one entry for each team size {list(TEAM_SIZES)}, got {list(given)}")
-    return {size: given[size] for size in TEAM_SIZES}
-
-
-def _detour(field: str, value: Any) -> tuple[float, float]:
-    if not (isinstance(value, list) and len(value) == 2):
-        raise ValueError(f"{field}: expected [small pad uu, big pad uu], got {value!r}")
-    return check_number(f"{field}[0]", value[0], 0.0), check_number(f"{field}[1]", value[1], 0.0)
+    return load_dataclass(KickoffTable, data, field, f"{field}.")
 
 
 HEADER = """\

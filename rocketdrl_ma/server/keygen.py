@@ -21,16 +21,17 @@ from pathlib import Path
 
 import yaml
 
+from rocketdrl_ma.config import load_yaml_mapping
+
 from .crypto import ServerIdentity, load_or_create_secret, write_private
 from .router import RouterSettings
-from .settings import (MEMBERS_USER, SERVER_USER, ServerSettings, ZenohSettings, _endpoint_host, _load_yaml,
-                       is_encrypted_endpoint)
+from .settings import MEMBERS_USER, SERVER_USER, ServerSettings, ZenohSettings, _endpoint_host, is_encrypted_endpoint
 
 CERT_DAYS = 825
 
 
 def _server_and_listener(config: str) -> tuple[ServerSettings, ZenohSettings]:
-    raw = _load_yaml(config, "config")
+    raw = load_yaml_mapping(config, "config")
     if "serves" in raw:  # a router YAML: the server's users, the router's TLS
         router = RouterSettings.from_dict(raw)
         if router.serves is None:

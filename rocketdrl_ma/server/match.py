@@ -1,10 +1,9 @@
-"""One match on the server: its slots, joining and leaving, the lockstep or real-time loop, the result.
+"""One match on the server from creation to its result: the seats filled, the lockstep or real-time loop, what it
+publishes, the result recorded.
 
-Each match runs in its own thread. Bots' actions arrive on Zenoh callback threads (``on_action``):
-they are checked (size, protocol version, that the key's user holds the slot, the MAC under the slot's
-secret, the decision number, the action's shape and range) and parsed into ``CarControls`` there, so
-nothing a bot sends can reach the env unchecked, and nobody but the slot's bot can act for its car.
-Everything the match publishes is signed by the server (``protocol.seal``) and numbered (``seq``).
+Each match runs in its own thread. Who sits where is ``match_seats.MatchSeats``; the bots' actions arrive on Zenoh
+callback threads and are checked there (``match_inbox.ActionInbox``); everything the match publishes is signed by
+the server and numbered (``match_wire.MatchWire``); the tally behind its result is ``match_record.MatchRecord``.
 """
 from __future__ import annotations
 
@@ -14,25 +13,27 @@ import time
 import traceback
 import uuid
 from collections import Counter
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any, Callable
 
 import numpy as np
 
 import rocketdrl_ma
 from rocketdrl_ma.config import load_config
-from rocketdrl_ma.env.actions import make_action_parser
-from rocketdrl_ma.env.observations import make_obs_builder
 from rocketdrl_ma.physics import CarControls
 from rocketdrl_ma.results import MatchResult
-from rocketdrl_ma.rules.events import GameEvent, Goal
+from rocketdrl_ma.rules.events import GameEvent
 
-from .crypto import KeyExchange, ServerIdentity, action_mac, random_bytes, same_mac
-from .protocol import (ENDED_STATUSES, Keys, MatchStatus, ProtocolError, VersionError, encode_space, encode_state,
-                       pack_value, split_action, unpack_map)
-from .settings import Limits, MatchOptions
+from .crypto import KeyExchange, ServerIdentity
+from .match_inbox import ActionInbox
+from .match_record import MatchRecord
+from .match_seats import JoinRequest, MatchSeats
 from .match_wire import MatchWire
+from .protocol import ENDED_STATUSES, Keys, MatchStatus, encode_space, encode_state, pack_value
+from .settings import Limits, MatchOptions
 from .slots import NEUTRAL, Slot, slot_observations
+
+__all__ = ["INTERNAL_ERROR", "JoinRequest", "MatchRunner", "REALTIME_TICK_HZ"]
 
 log = logging.getLogger(__name__)
 REALTIME_TICK_HZ = 120.0
@@ -40,31 +41,6 @@ REALTIME_TICK_HZ = 120.0
 #: the car's response to a key one state sooner
 REALTIME_STATE_TICKS = 2
 INTERNAL_ERROR = "internal error (details in the server's log)"
-_MAX_SPEC_NAME = 64
-
-
-@dataclass
-class JoinRequest:
-    """A join, rejoin or leave as the lobby hands it to the match: who asks (the user of the lobby key),
-    the decoded ``args``, the request's ``nonce``, and ``proves(key)``: whether the request carries a valid
-    MAC under ``key`` over a fresh challenge (``crypto.request_mac``)."""
-    user: str
-    args: dict
-    nonce: bytes
-    proves: Callable[[bytes], bool]
-
-
-def _spec(value: Any, field: str) -> dict:
-    """``"ray"`` or ``{"name": "ray", "n_rays": 12}`` -> a spec mapping; anything else is a ValueError."""
-    spec = {"name": value} if isinstance(value, str) else dict(value) if isinstance(value, dict) else None
-    if spec is None or not isinstance(spec.get("name"), str) or not 0 < len(spec["name"]) <= _MAX_SPEC_NAME:
-        raise ValueError(f"{field}: expected a name (at most {_MAX_SPEC_NAME} characters) or a mapping with "
-                         f"'name' and its options, got {value!r}")
-    return spec
-
-
-def _percentile_ms(values: list[float], q: float) -> float | None:
-    return round(float(np.percentile(values, q)) * 1e3, 3) if values else None
 
 
 class MatchRunner:
@@ -87,30 +63,20 @@ class MatchRunner:
             if env_config["max_cycles"] is not None:
                 overrides["max_cycles"] = env_config["max_cycles"] * self.decision_ticks
         self.env = rocketdrl_ma.parallel_env(options.config, **overrides)
-        self.slots: dict[str, Slot] = {agent: Slot(agent) for agent in self.env.possible_agents}
-        unknown = sorted(set(options.seats) - set(self.slots))
-        if unknown:
+        try:
+            team_sizes = (self.env.rules.blue_size, self.env.rules.orange_size)
+            self.seats = MatchSeats(match_id, self.env.possible_agents, options, self.limits, keys.server, team_sizes)
+            if creator is not None:
+                self.limits.check_observation(env_config["observation"]["name"], self.env.obs_builder, *team_sizes)
+        except ValueError:
             self.env.close()
-            raise ValueError(f"seats: {unknown} are not slots of this match; slots: {list(self.slots)}")
-        if creator is not None:
-            try:
-                self.limits.check_observation(env_config["observation"]["name"], self.env.obs_builder,
-                                              self.env.rules.blue_size, self.env.rules.orange_size)
-            except ValueError:
-                self.env.close()
-                raise
-        self.tickets: dict[str, str] = {}
-        for slot in self.slots.values():
-            slot.seat = options.seats.get(slot.name)
-            if not options.open and slot.seat is None:
-                slot.ticket = random_bytes()
-                self.tickets[slot.name] = slot.ticket.hex()
-        # The env plays every car from CarControls: the server parses and checks each bot's action with its slot's
-        # parser (or the match's, ``self._match_parser``) when it arrives, and builds only remote slots' observations.
-        self._match_parser = self.env.action_parser
+            raise
+        self.slots: dict[str, Slot] = self.seats.slots
+        self.tickets: dict[str, str] = self.seats.tickets
+        # The env plays every car from CarControls: the inbox parses and checks each bot's action with its slot's
+        # parser (or the match's) when it arrives, and the match builds only remote slots' observations.
         self._match_obs = self.env.obs_builder
         self._fill: dict[str, Any] = {}
-        self._jump_pressed: set[str] = set()  # real-time: slots whose jump was pressed since the last tick
         self.status = MatchStatus.WAITING
         self.instance = uuid.uuid4().hex  # tells this match from an earlier one of the same id
         self.created_at = time.time()
@@ -119,19 +85,13 @@ class MatchRunner:
         self.result_key: str | None = None
         self.final_summary: dict | None = None
         self.error: str | None = None
-        self.decision = 0  # the decision whose actions are being collected
         self.scoreboard: dict = {}
-        self.rejected: Counter = Counter()
-        self._event_counts: Counter = Counter()
-        self._goals: list[dict] = []
-        self._decision_s: list[float] = []
-        self._wait_s: list[float] = []
+        self.tally = MatchRecord()
         self._cond = threading.Condition()
         self._stop = threading.Event()
         self._wire = MatchWire(session, keys, identity, match_id, self.instance)
-        # One subscriber per taken slot, on that slot's own key: with access control, Zenoh tells a client
-        # about a subscriber only if the key lies within what the client may use (its own prefix).
-        self._act_subs: dict[str, Any] = {}
+        self.inbox = ActionInbox(session, keys, match_id, options.mode, self.env.action_parser, self._cond,
+                                 self._wire)
         self._thread = threading.Thread(target=self._run, name=f"match-{match_id}", daemon=True)
 
     def start(self) -> None:
@@ -141,99 +101,34 @@ class MatchRunner:
     def live(self) -> bool:
         return self.status not in ENDED_STATUSES
 
+    @property
+    def decision(self) -> int:
+        """The decision whose actions are being collected."""
+        return self.inbox.decision
+
+    @property
+    def rejected(self) -> Counter:
+        """Refused actions by reason (the inbox's)."""
+        return self.inbox.rejected
+
     # ------------------------------------------------------------------------------------------ lobby side
     def join(self, request: JoinRequest) -> dict:
-        """Seat a bot in the named open slot, or the first one it may take: the match is open, the slot is the
-        user's seat, or the request proves the slot's ticket. The slot's secret comes from the X25519
-        exchange (``client_key``)."""
-        args = request.args
-        name = args.get("name", "bot")
-        # printable only: the name is shown on terminals, where control characters would restyle them
-        if not isinstance(name, str) or not 0 < len(name) <= 64 or not name.isprintable():
-            raise ValueError(f"name: expected a bot name of 1-64 printable characters, got {name!r}")
-        wanted = self._slot_arg(args, required=False)
+        """Seat a bot (``MatchSeats.seat``) while the match waits for its bots."""
+        self.seats.join_args(request.args)
         exchange = KeyExchange()
         with self._cond:
             if self.status != MatchStatus.WAITING:
                 raise ValueError(f"match {self.id!r} is {self.status}; only its own bots can rejoin (op rejoin)")
-            open_slots = [s for s in self.slots.values() if s.occupant == "open"]
-            if wanted is not None:
-                slot = self.slots[wanted]
-                if slot.occupant != "open":
-                    raise ValueError(f"slot: {wanted!r} of match {self.id!r} is taken; open slots: "
-                                     f"{[s.name for s in open_slots]}")
-                if not self._may_take(slot, request):
-                    raise ValueError(f"slot: {wanted!r} of match {self.id!r} is reserved: " +
-                                     (f"it is user {slot.seat!r}'s seat" if slot.seat else
-                                      "join with its ticket (from the match's creator)"))
-            else:
-                slot = next((s for s in open_slots if self._may_take(s, request)), None)
-                if slot is None:
-                    raise ValueError(f"match {self.id!r} has no open slot for user {request.user!r}" +
-                                     ("" if not open_slots or self.options.open else
-                                      "; its slots need a ticket or a seat"))
-            obs_builder = action_parser = None
-            obs_spec = action_spec = None
-            if args.get("observation") is not None:
-                obs_spec = _spec(args["observation"], "observation")
-                options = {k: v for k, v in obs_spec.items() if k != "name"}
-                obs_builder = make_obs_builder(obs_spec["name"], **options)
-                # fits this match, and this server's budget?
-                self.limits.check_observation(obs_spec["name"], obs_builder, self.env.rules.blue_size,
-                                              self.env.rules.orange_size)
-            if args.get("action") is not None:
-                action_spec = _spec(args["action"], "action")
-                action_parser = make_action_parser(action_spec["name"],
-                                                   **{k: v for k, v in action_spec.items() if k != "name"})
-            secret, rejoin_key = exchange.slot_keys(args.get("client_key"), request.nonce, self.keys.server, self.id,
-                                                    slot.name)
-            slot.take(name, request.user, secret, rejoin_key)
-            slot.obs_spec, slot.action_spec = obs_spec, action_spec
-            slot.obs_builder, slot.action_parser = obs_builder, action_parser
-            slot.with_state = bool(args.get("with_state", True))
-            self._listen_for_actions(slot)
+            slot = self.seats.seat(request, exchange)
+            self.inbox.listen(slot)
             self._cond.notify_all()
             return {**self._join_reply(slot), "server_key_exchange": exchange.public_bytes}
 
-    def _listen_for_actions(self, slot: Slot) -> None:
-        old = self._act_subs.pop(slot.name, None)
-        if old is not None:
-            old.undeclare()
-        key = self.keys.slot(slot.user, self.id, slot.name, "act")
-        self._act_subs[slot.name] = self.session.declare_subscriber(key, lambda sample: self.on_action(slot, sample))
-
-    def _may_take(self, slot: Slot, request: JoinRequest) -> bool:
-        if slot.seat is not None:
-            return slot.seat == request.user
-        return self.options.open or (slot.ticket is not None and request.proves(slot.ticket))
-
-    def _slot_arg(self, args: dict, required: bool = True) -> str | None:
-        wanted = args.get("slot")
-        if wanted is None and not required:
-            return None
-        if wanted not in self.slots:
-            raise ValueError(f"slot: {wanted!r} is not a slot of match {self.id!r}; slots: {list(self.slots)}")
-        return wanted
-
-    def _own_slot(self, request: JoinRequest, rejoin: bool = False) -> Slot:
-        """The slot a leave (or, ``rejoin``, a rejoin) names, if the request proves the slot's secret (its rejoin
-        key) and comes from its user."""
-        slot = self.slots[self._slot_arg(request.args)]
-        key = slot.rejoin_key if rejoin else slot.secret
-        if slot.secret is None or slot.left or slot.user != request.user or key is None or not request.proves(key):
-            raise ValueError(f"slot: this request does not prove the {'rejoin key' if rejoin else 'secret'} of slot "
-                             f"{slot.name!r} of match {self.id!r} (for user {request.user!r})")
-        return slot
-
     def rejoin(self, request: JoinRequest) -> dict:
-        """A bot back after a crash: same slot, new keys from a new exchange (the old ones stop working), a new
-        lease for its new liveliness token."""
+        """A bot back after a crash (``MatchSeats.reseat``)."""
         exchange = KeyExchange()
         with self._cond:
-            slot = self._own_slot(request, rejoin=True)
-            slot.secret, slot.rejoin_key = exchange.slot_keys(request.args.get("client_key"), request.nonce,
-                                                              self.keys.server, self.id, slot.name)
-            slot.new_lease()
+            slot = self.seats.reseat(request, exchange)
             self._cond.notify_all()
             return {**self._join_reply(slot), "server_key_exchange": exchange.public_bytes}
 
@@ -249,7 +144,7 @@ class MatchRunner:
             "observation": slot.obs_spec or self.config["observation"],
             "action": slot.action_spec or self.config["action"],
             "observation_space": encode_space(obs_space),
-            "action_space": encode_space((slot.action_parser or self._match_parser).space()),
+            "action_space": encode_space((slot.action_parser or self.inbox.parser).space()),
             "keys": keys | {"alive": self.keys.bot_alive(slot.user, self.id, slot.name, slot.lease),
                             "state": self.keys.state(self.id), "events": self.keys.events(self.id),
                             "server_alive": self.keys.server_alive},
@@ -257,21 +152,16 @@ class MatchRunner:
 
     def leave(self, request: JoinRequest) -> dict:
         with self._cond:
-            slot = self._own_slot(request)
-            if self.status == MatchStatus.WAITING:
-                slot.release()
-                self._act_subs.pop(slot.name).undeclare()
-            else:  # mid-match the seat stays, played by replacement actions; the secret stops working
-                slot.left, slot.secret, slot.rejoin_key, slot.alive = True, None, None, False
+            running = self.status != MatchStatus.WAITING
+            slot = self.seats.unseat(request, running)
+            if not running:
+                self.inbox.forget(slot)
             self._cond.notify_all()
             return {"match": self.id, "slot": slot.name}
 
     def set_alive(self, user: str, slot_name: str, lease: str, alive: bool) -> None:
         with self._cond:
-            slot = self.slots.get(slot_name)
-            if slot is not None and slot.user == user and slot.lease is not None and slot.lease == lease \
-                    and not slot.left:
-                slot.alive = alive
+            if self.seats.set_alive(user, slot_name, lease, alive):
                 self._cond.notify_all()
 
     def stop(self) -> None:
@@ -300,87 +190,9 @@ class MatchRunner:
         with self._cond:
             return {**self._summary(), "options": self.options.as_dict(), "game_config": self.config,
                     "seed": self.seed, "created_at": self.created_at, "started_at": self.started_at,
-                    "scoreboard": self.scoreboard, "slot_status": {n: s.public() for n, s in self.slots.items()},
-                    "rejected": dict(self.rejected), "events": dict(self._event_counts), "error": self.error,
-                    "timing": self._timing(), "summary": self.final_summary}
-
-    # ------------------------------------------------------------------------------------------ actions in
-    def _reject(self, reason: str, slot: Slot | None = None, message: str | None = None) -> None:
-        with self._cond:
-            self.rejected[reason] += 1
-            if slot is not None and reason == "invalid_action":
-                slot.counts["invalid"] += 1
-        if slot is not None and message is not None:
-            # Only an authenticated sender learns why, on its own slot's key. A priority above the per-decision
-            # stream's keeps the reply out of a queue full of states on a busy link; DROP, as there, so a
-            # congested bot never stalls the Zenoh callback that serves every other slot. Not express: replies
-            # to a burst of bad actions share a batch, where express ones took a batch each and overflowed that
-            # priority's queue (two batches) whenever Zenoh's sender waited for the CPU.
-            import zenoh
-            self.session.put(self.keys.slot(slot.user, self.id, slot.name, "error"), self._wire.seal(
-                {"kind": "error", "slot": slot.name, "decision": self.decision, "error": message}),
-                priority=zenoh.Priority.DATA_HIGH, congestion_control=zenoh.CongestionControl.DROP)
-
-    def on_action(self, slot: Slot, sample) -> None:
-        """Zenoh callback for a slot's ``act`` key: check everything, then hand the controls to the match."""
-        if slot.secret is None:
-            self._reject("no_player")  # the bot left the running match
-            return
-        try:
-            body, mac = split_action(sample.payload.to_bytes())
-        except VersionError:
-            self._reject("bad_version")
-            return
-        except ProtocolError as e:
-            self._reject("oversize" if "over the limit" in str(e) else "malformed")
-            return
-        secret = slot.secret
-        if secret is None or not same_mac(mac, action_mac(secret, body)):
-            self._reject("bad_mac")
-            return
-        try:
-            message = unpack_map(body, len(body), "action")
-        except ProtocolError as e:
-            self._reject("invalid_action", slot, str(e))
-            return
-        decision = message.get("decision")
-        if message.get("match") != self.id or message.get("slot") != slot.name:
-            self._reject("invalid_action", slot, f"action: names match {message.get('match')!r} slot "
-                                                 f"{message.get('slot')!r}, not this key's")
-            return
-        if isinstance(decision, bool) or not isinstance(decision, int):
-            self._reject("invalid_action", slot, f"decision: expected the decision number, got {decision!r}")
-            return
-        try:
-            controls = (slot.action_parser or self._match_parser).parse(slot.name, message.get("action"))
-        except ValueError as e:
-            self._reject("invalid_action", slot, str(e))
-            return
-        with self._cond:
-            slot.heard()
-            if self.options.mode == "lockstep":
-                if decision != self.decision:
-                    late = decision < self.decision
-                    self.rejected["late" if late else "future_decision"] += 1
-                    slot.counts["late" if late else "invalid"] += 1
-                    self._cond.notify_all()
-                    return
-                if slot.pending is not None:  # one action per decision: the first one counts
-                    self.rejected["duplicate"] += 1
-                    return
-                slot.pending = controls
-            else:  # realtime: the newest action wins, whenever it arrives
-                if decision > self.decision or decision < slot.acted_decision:
-                    self.rejected["future_decision" if decision > self.decision else "late"] += 1
-                    return
-                if controls.jump and not slot.last_controls.jump:  # a tap released before the next tick still jumps
-                    self._jump_pressed.add(slot.name)
-                slot.last_controls = controls
-                if decision == slot.acted_decision:  # a newer action for the same decision: counted once
-                    return
-            slot.acted_decision = decision
-            slot.counts["received"] += 1
-            self._cond.notify_all()
+                    "scoreboard": self.scoreboard, "slot_status": self.seats.public(),
+                    "rejected": dict(self.rejected), "events": dict(self.tally.event_counts), "error": self.error,
+                    "timing": self.tally.timing(), "summary": self.final_summary}
 
     # ------------------------------------------------------------------------------------------ the match
     def _run(self) -> None:
@@ -400,15 +212,13 @@ class MatchRunner:
         deadline = self.created_at + self.options.ready_timeout_s
         with self._cond:
             while not self._stop.is_set():
-                if all(s.waits_for for s in self.slots.values()):
+                if self.seats.all_ready():
                     break
                 remaining = deadline - time.time()
                 if remaining <= 0:
                     break
                 self._cond.wait(remaining)
-            for slot in self.slots.values():
-                if slot.occupant == "open":
-                    slot.occupant, slot.bot = "fill", self.options.fill
+            self.seats.fill_open(self.options.fill)
             self.status = MatchStatus.RUNNING
             self.started_at = time.time()
         from rocketdrl_ma.policies.registry import load_policy
@@ -423,12 +233,6 @@ class MatchRunner:
 
     def _replacement(self, slot: Slot) -> CarControls:
         return slot.last_controls if self.options.replacement == "repeat" else NEUTRAL
-
-    def _count_events(self, events: list[GameEvent]) -> None:
-        for event in events:
-            self._event_counts[event.kind.value] += 1
-            if isinstance(event, Goal):
-                self._goals.append({k: v for k, v in event.as_dict().items() if k != "kind"})
 
     def _observe(self, new_episode: bool = False) -> dict[str, np.ndarray]:
         return slot_observations(self.slots, self._match_obs, self.env.game_state, new_episode)
@@ -473,14 +277,14 @@ class MatchRunner:
                         actions[slot.name] = self._replacement(slot)
                         slot.last_controls = actions[slot.name]
                     slot.pending = None
-                self.decision += 1  # actions for the decision just closed are late from now on
-            self._wait_s.append(time.perf_counter() - t_wait)
+                self.inbox.decision += 1  # actions for the decision just closed are late from now on
+            self.tally.wait_s.append(time.perf_counter() - t_wait)
             for agent in env.agents:
                 actions.setdefault(agent, NEUTRAL)  # an idle fill slot
             _, rewards, _, _, _ = env.play(actions, observe=False)
             observations = self._observe()
-            self._count_events(env.game_state.events)
-            self._decision_s.append(time.perf_counter() - t0)
+            self.tally.count_events(env.game_state.events)
+            self.tally.decision_s.append(time.perf_counter() - t0)
         self._publish(observations, rewards, env.game_state, done=True)
 
     def _realtime(self, observations: dict, rewards: dict) -> None:
@@ -498,9 +302,9 @@ class MatchRunner:
                         for slot in self.slots.values():
                             if slot.occupant == "remote" and slot.acted_decision < self.decision:
                                 slot.missed(self.missed_streak)
-                        self.decision += 1
+                        self.inbox.decision += 1
                         now = time.perf_counter()
-                        self._decision_s.append(now - last_decision_t)
+                        self.tally.decision_s.append(now - last_decision_t)
                         last_decision_t = now
                 if tick > 0:
                     observations = self._observe()
@@ -513,9 +317,9 @@ class MatchRunner:
             with self._cond:
                 actions = {s.name: s.last_controls if s.waits_for or self.options.replacement == "repeat"
                            else NEUTRAL for s in self.slots.values() if s.occupant == "remote"}
-                for name in self._jump_pressed & actions.keys():
+                for name in self.inbox.jump_pressed & actions.keys():
                     actions[name] = replace(actions[name], jump=True)
-                self._jump_pressed.clear()
+                self.inbox.jump_pressed.clear()
             actions.update(fill)
             for agent in env.agents:
                 actions.setdefault(agent, NEUTRAL)
@@ -523,7 +327,7 @@ class MatchRunner:
             for agent, r in step_rewards.items():
                 acc_rewards[agent] += r
             events += env.game_state.events
-            self._count_events(env.game_state.events)
+            self.tally.count_events(env.game_state.events)
             tick += 1
             next_t += period
             delay = next_t - time.perf_counter()
@@ -540,7 +344,7 @@ class MatchRunner:
     # ------------------------------------------------------------------------------------------ publishing
     def _slots_public(self) -> dict:
         with self._cond:
-            return {n: s.public() for n, s in self.slots.items()}
+            return self.seats.public()
 
     def _publish(self, observations: dict, rewards: dict, state, done: bool, events: list | None = None) -> None:
         events = [event.as_dict() for event in (state.events if events is None else events)]
@@ -568,31 +372,15 @@ class MatchRunner:
                                                  "slots": self._slots_public()},
                                                 {"state": state_bytes or pack_value(encode_state(state))}))
 
-    def _timing(self) -> dict:
-        return {"decisions": len(self._decision_s), "decision_ms_median": _percentile_ms(self._decision_s, 50),
-                "decision_ms_p99": _percentile_ms(self._decision_s, 99),
-                "wait_ms_median": _percentile_ms(self._wait_s, 50), "wait_ms_p99": _percentile_ms(self._wait_s, 99),
-                "wall_s": round(sum(self._decision_s), 4)}
-
     def _end(self, status: str) -> None:
-        rules = self.env.rules
         summary = None
         if status == MatchStatus.FINISHED:
-            summary = rules.summary()
-            state = self.env.game_state
-            slots = {n: s.public() for n, s in self.slots.items()}
+            summary = self.env.rules.summary()
             key = f"{self.keys.server}/{self.id}/{uuid.uuid4().hex[:12]}"
-            result = MatchResult(
-                match_key=key, source="server", config=self.config,
-                entrants={n: s.bot or "idle" for n, s in self.slots.items()},
-                score_blue=int(state.score[0]), score_orange=int(state.score[1]),
-                duration_s=state.tick / state.tick_rate, seed=self.seed,
-                details={"match_id": self.id, "mode": self.options.mode, "options": self.options.as_dict(),
-                         "events": dict(self._event_counts), "goals": self._goals,
-                         "stats": summary.get("stats", {}), "overtime": bool(summary.get("overtime", False)),
-                         "missed_decisions": {n: s["missed"] + s["disconnected"] for n, s in slots.items()},
-                         "bots": slots, "rejected": dict(self.rejected), "timing": self._timing()})
-            self._record(result)
+            self._record(self.tally.result(
+                key, self.config, {n: s.bot or "idle" for n, s in self.slots.items()}, self.env.game_state, self.seed,
+                summary, {"match_id": self.id, "mode": self.options.mode, "options": self.options.as_dict()},
+                self.seats.public(), dict(self.rejected)))
             self.result_key = key
         self.final_summary = summary
         with self._cond:
@@ -601,7 +389,7 @@ class MatchRunner:
             self._wire.put("events", self._wire.seal({
                 "kind": "events", "decision": self.decision, "done": True, "final": True, "events": [],
                 "status": status, "summary": summary, "error": self.error, "result_key": self.result_key}), final=True)
-        self._wire.close(list(self._act_subs.values()))
+        self._wire.close(self.inbox.subscribers())
         self.env.close()
 
     def discard(self) -> None:

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
+from rocketdrl_ma.config import load_yaml_mapping
 from rocketdrl_ma.validation import Check, load_dataclass
 
 from .access import acl_config, read_users_file
-from .settings import SERVER_USER, ServerSettings, ZenohSettings, _load_yaml
+from .settings import SERVER_USER, ServerSettings, ZenohSettings
 
 
 def _served(field: str, serves: Any) -> ServerSettings | None:
@@ -46,7 +47,7 @@ class RouterSettings:
 
     @classmethod
     def load(cls, path: str | Path) -> "RouterSettings":
-        return cls.from_dict(_load_yaml(path, "router config"))
+        return cls.from_dict(load_yaml_mapping(path, "router config"))
 
     @property
     def server_name(self) -> str | None:

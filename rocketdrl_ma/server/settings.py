@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Annotated, Any
 
-from rocketdrl_ma.config import load_yaml_file, resolve_shipped_path
+from rocketdrl_ma.config import load_yaml_mapping
 from rocketdrl_ma.validation import Check, Expect, Name, OneOf, Range, check_choice, check_name, load_dataclass
 
 from .protocol import MAX_MESSAGE_BYTES
@@ -402,20 +402,12 @@ class ServerSettings:
 
     @classmethod
     def load(cls, path: str | Path) -> "ServerSettings":
-        return cls.from_dict(_load_yaml(path, "server config"))
-
-
-def _load_yaml(path: str | Path, what: str) -> dict:
-    p = resolve_shipped_path(path, what)  # as given, else the shipped one (server/local.yaml from any folder)
-    raw = load_yaml_file(p, what) or {}
-    if not isinstance(raw, dict):
-        raise ValueError(f"{what}: {path} must hold a mapping")
-    return raw
+        return cls.from_dict(load_yaml_mapping(path, "server config"))
 
 
 def load_zenoh_settings(path: str | Path) -> ZenohSettings:
     """The ``zenoh:`` section of a YAML file (a server, router or client config)."""
-    raw = _load_yaml(path, "config")
+    raw = load_yaml_mapping(path, "config")
     if "zenoh" not in raw:
         raise ValueError(f"config: {path} has no 'zenoh' section")
     return ZenohSettings.from_dict(raw["zenoh"])
@@ -509,7 +501,7 @@ class ClientSettings:
 
     @classmethod
     def load(cls, path: str | Path, **overrides: Any) -> "ClientSettings":
-        raw = _load_yaml(path, "client config")
+        raw = load_yaml_mapping(path, "client config")
         return cls.from_dict({**raw, **{k: v for k, v in overrides.items() if v is not None}})
 
     def replace(self, **changes: Any) -> "ClientSettings":

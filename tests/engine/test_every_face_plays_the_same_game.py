@@ -1,5 +1,5 @@
 """Every face plays the same game: from one config and seed, with the same scripted bots, the engine itself, the
-PettingZoo env, a lane of a VectorEnv, a lockstep match on the match server (the bots remote, over Zenoh) and a league
+PettingZoo env, a game of a VectorEnv, a lockstep match on the match server (the bots remote, over Zenoh) and a league
 match go through the same states, tick for tick (one physics tick a decision; each state hashed as the server puts it
 on the wire, with the league's ``sha256_of``)."""
 from __future__ import annotations
@@ -73,24 +73,24 @@ def parallel_env_face() -> list[str]:
     return digests
 
 
-def vector_env_lane_face() -> list[str]:
-    """Lane 0 of two, the other lane playing its own game beside it in the same world. (A lane elsewhere in the
+def vector_env_game_face() -> list[str]:
+    """Game 0 of two, the other playing its own game beside it in the same world. (A game elsewhere in the
     world's grid of arenas plays about another origin: the same game up to float rounding.)"""
-    vec = VectorEnv(CONFIG, n_arenas=2, autoreset=False, **OVERRIDES)
+    vec = VectorEnv(CONFIG, n_games=2, autoreset=False, **OVERRIDES)
     policies = [bots(), bots()]
     vec.reset(seed=SEED)
-    for lane, players in zip(vec.lanes, policies):
+    for game, players in zip(vec.games, policies):
         for policy in players.values():
-            policy.reset(lane.game_state)
-    digests = [digest(vec.lanes[0].game_state)]
+            policy.reset(game.game_state)
+    digests = [digest(vec.games[0].game_state)]
     done = False
     while not done:
-        _, _, terminated, truncated, _ = vec.step(None, [controls_of(players, lane.game_state, lane.agents)
-                                                         for lane, players in zip(vec.lanes, policies)])
-        digests.append(digest(vec.lanes[0].game_state))
+        _, _, terminated, truncated, _ = vec.step(None, [controls_of(players, game.game_state, game.agents)
+                                                         for game, players in zip(vec.games, policies)])
+        digests.append(digest(vec.games[0].game_state))
         done = bool(terminated[0] or truncated[0])
         if (terminated | truncated)[1] and not done:
-            vec.reset_arenas(np.array([False, True]))
+            vec.reset_games(np.array([False, True]))
     vec.close()
     return digests
 
@@ -161,7 +161,7 @@ def server_face(tmp_path, monkeypatch) -> list[str]:
 def test_every_face_plays_the_same_game_tick_for_tick(tmp_path, monkeypatch):
     reference = engine_face()
     assert len(reference) > 2 * 120  # the 2 s of clock, one tick a decision
-    faces = {"ParallelEnv": parallel_env_face(), "VectorEnv lane": vector_env_lane_face(), "league": league_face(),
+    faces = {"ParallelEnv": parallel_env_face(), "VectorEnv game": vector_env_game_face(), "league": league_face(),
              "server (lockstep)": server_face(tmp_path, monkeypatch)}
     for face, digests in faces.items():
         first_difference = next((t for t, (a, b) in enumerate(zip(reference, digests)) if a != b), None)

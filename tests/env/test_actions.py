@@ -3,13 +3,13 @@ import numpy as np
 import pytest
 from gymnasium import spaces
 
-from rocketdrl_ma.env.actions import (ACTION_PARSERS, ActionParser, ContinuousActions, LookupTableActions,
-                                      SeedActions, lookup_table, make_action_parser)
+from rocketdrl_ma.env.actions import (ACTION_PARSERS, ActionParser, ContinuousActions, DriveActions,
+                                      LookupTableActions, lookup_table, make_action_parser)
 from rocketdrl_ma.physics import CarControls
 
 
 def test_box_spaces_are_finite_float32():
-    for parser, n in ((SeedActions(), 5), (ContinuousActions(), 8)):
+    for parser, n in ((DriveActions(), 5), (ContinuousActions(), 8)):
         sp = parser.space()
         assert isinstance(sp, spaces.Box) and sp.dtype == np.float32 and sp.shape == (n,)
         assert np.all(sp.low == -1.0) and np.all(sp.high == 1.0)
@@ -24,12 +24,12 @@ def test_continuous_fields_in_order():
 
 
 def test_seed_fields_in_order():
-    c = SeedActions().parse("orange_1", [-1.0, 0.75, 0.2, 0.9, -0.1])
+    c = DriveActions().parse("orange_1", [-1.0, 0.75, 0.2, 0.9, -0.1])
     assert (c.throttle, c.steer, c.pitch, c.yaw, c.roll) == (-1.0, 0.75, 0.0, 0.0, 0.0)
     assert (c.jump, c.boost, c.handbrake) == (True, True, False)
 
 
-@pytest.mark.parametrize("parser,offset", [(SeedActions(), 2), (ContinuousActions(), 5)])
+@pytest.mark.parametrize("parser,offset", [(DriveActions(), 2), (ContinuousActions(), 5)])
 def test_buttons_threshold_at_zero(parser, offset):
     n = parser.space().shape[0]
     for value, pressed in ((0.0, False), (-0.0, False), (1e-4, True), (-1e-4, False), (1.0, True), (-1.0, False)):
@@ -43,7 +43,7 @@ def test_buttons_threshold_at_zero(parser, offset):
 
 def test_random_samples_parse():
     rng = np.random.default_rng(0)
-    for parser in (SeedActions(), ContinuousActions(), LookupTableActions()):
+    for parser in (DriveActions(), ContinuousActions(), LookupTableActions()):
         sp = parser.space()
         sp.seed(int(rng.integers(1 << 30)))
         for _ in range(200):
@@ -62,7 +62,7 @@ def test_tiny_overshoot_is_clipped_but_clear_overshoot_is_an_error():
         p.parse("blue_0", a)
 
 
-@pytest.mark.parametrize("parser", [SeedActions(), ContinuousActions()], ids=lambda p: type(p).__name__)
+@pytest.mark.parametrize("parser", [DriveActions(), ContinuousActions()], ids=lambda p: type(p).__name__)
 def test_bad_box_actions_name_the_agent(parser):
     n = parser.space().shape[0]
     bad = [np.full(n, np.nan), np.zeros(n + 1), np.zeros((1, n)), np.zeros(n - 1), np.full(n, 1.5),
@@ -109,7 +109,7 @@ def test_bad_lookup_actions_name_the_agent():
             p.parse("blue_1", action)
 
 
-@pytest.mark.parametrize("parser", [SeedActions(), ContinuousActions(), LookupTableActions()],
+@pytest.mark.parametrize("parser", [DriveActions(), ContinuousActions(), LookupTableActions()],
                          ids=lambda p: type(p).__name__)
 def test_encode_round_trips_through_parse(parser):
     controls = CarControls(throttle=1.0, steer=-1.0, yaw=-1.0, boost=True)
@@ -152,7 +152,7 @@ def test_registry():
     assert set(ACTION_PARSERS) == {"drive", "continuous", "lookup", "seed"}  # "seed": drive's old name
     assert all(issubclass(cls, ActionParser) for cls in ACTION_PARSERS.values())
     assert isinstance(make_action_parser("lookup"), LookupTableActions)
-    assert isinstance(make_action_parser("seed"), SeedActions)
+    assert isinstance(make_action_parser("drive"), DriveActions)
     with pytest.raises(ValueError, match="allowed.*continuous"):
         make_action_parser("discrete")
     with pytest.raises(ValueError, match="bins"):

@@ -61,22 +61,22 @@ def test_a_game_config_plays_in_the_game_shape(tmp_path):
         classic.close()
 
 
-def test_a_vector_env_lane_plays_in_the_configured_shape():
-    game = VectorEnv("matches/1v1.yaml", n_arenas=2, arena_shape="game")
-    classic = VectorEnv("matches/1v1.yaml", n_arenas=2)
+def test_a_vector_env_game_plays_in_the_configured_shape():
+    game = VectorEnv("matches/1v1.yaml", n_games=2, arena_shape="game")
+    classic = VectorEnv("matches/1v1.yaml", n_games=2)
     lone = RocketDRLParallelEnv("matches/1v1.yaml", arena_shape="game")
     try:
         for env in (game, classic):
             env.reset(seed=0)
         lone.reset(seed=0)
         assert game.batch.arena_shape == "game" and classic.batch.arena_shape == "classic"
-        lane = game.lanes[1].rules
-        assert lane.arena is game.batch.arenas[1] and lane.game_state().arena_shape == "game"
-        off_lane = _ball_off_the_side_wall_fillet(lane.arena, game.batch.step)
-        off_classic = _ball_off_the_side_wall_fillet(classic.lanes[1].rules.arena, classic.batch.step)
+        played = game.games[1].rules
+        assert played.arena is game.batch.arenas[1] and played.game_state().arena_shape == "game"
+        off_played = _ball_off_the_side_wall_fillet(played.arena, game.batch.step)
+        off_classic = _ball_off_the_side_wall_fillet(classic.games[1].rules.arena, classic.batch.step)
         off_lone = _ball_off_the_side_wall_fillet(lone.rules.arena)
-        assert np.linalg.norm(off_lane - off_classic) > 200.0
-        assert np.allclose(off_lane, off_lone, atol=1e-3)  # the batch's game shape is a lone arena's
+        assert np.linalg.norm(off_played - off_classic) > 200.0
+        assert np.allclose(off_played, off_lone, atol=1e-3)  # the batch's game shape is a lone arena's
     finally:
         game.close()
         classic.close()
@@ -85,7 +85,7 @@ def test_a_vector_env_lane_plays_in_the_configured_shape():
 
 @pytest.mark.parametrize("make", [
     lambda: RocketDRLParallelEnv("matches/1v1.yaml", arena_shape="round"),
-    lambda: VectorEnv("matches/1v1.yaml", n_arenas=1, arena_shape="round"),
+    lambda: VectorEnv("matches/1v1.yaml", n_games=1, arena_shape="round"),
     lambda: load_config({"mode": "penalty", "arena_shape": "round"}),
     lambda: Match(arena_shape="round"),
 ])

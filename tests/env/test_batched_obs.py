@@ -13,7 +13,7 @@ from rocketdrl_ma.policies.scripted import BallChaser
     ("matches/2v2.yaml", {"kickoff_countdown_s": 0.0, "max_cycles": 60}),
 ])
 def test_batched_observations_equal_the_reference_builder(config, overrides):
-    vec = VectorEnv(config, n_arenas=3, autoreset=False, **overrides)
+    vec = VectorEnv(config, n_games=3, autoreset=False, **overrides)
     assert vec._batched_obs is not None
     agents = vec.possible_agents
     vec.reset(seed=3)
@@ -21,30 +21,30 @@ def test_batched_observations_equal_the_reference_builder(config, overrides):
     chaser = BallChaser()
     seen = {"kickoff_pending": 0, "ended": 0}
     for step in range(200):
-        actions = rng.uniform(-1.0, 1.0, (vec.n_arenas, len(agents), 8)).astype(np.float32)
+        actions = rng.uniform(-1.0, 1.0, (vec.n_games, len(agents), 8)).astype(np.float32)
         if step % 4:  # mostly ball chasing, so that touches and bumps happen
-            for k, lane in enumerate(vec.lanes):
+            for k, game in enumerate(vec.games):
                 for j, agent in enumerate(agents):
-                    actions[k, j] = lane.action_parser.encode(chaser.controls(agent, lane.game_state))
+                    actions[k, j] = game.action_parser.encode(chaser.controls(agent, game.game_state))
         obs, _, terminated, truncated, _ = vec.step(actions)
-        for k, lane in enumerate(vec.lanes):
-            state = lane.game_state
-            reference = np.stack([lane.obs_builder.build(agent, state) for agent in agents])
+        for k, game in enumerate(vec.games):
+            state = game.game_state
+            reference = np.stack([game.obs_builder.build(agent, state) for agent in agents])
             np.testing.assert_array_equal(obs[k], reference)
             seen["kickoff_pending"] += state.kickoff_pending
         done = terminated | truncated
         seen["ended"] += int(done.sum())
         if done.any():
-            vec.reset_arenas(done)
+            vec.reset_games(done)
     assert seen["ended"] > 0
     if config == "matches/1v1.yaml":
         assert seen["kickoff_pending"] > 0
-    # A score difference (goals are rare in 200 decisions): each lane's state carries its own score.
-    for k, lane in enumerate(vec.lanes):
-        lane.rules.score = [k, 2]
-        lane._state = lane.rules.game_state()
+    # A score difference (goals are rare in 200 decisions): each game's state carries its own score.
+    for k, game in enumerate(vec.games):
+        game.rules.score = [k, 2]
+        game._state = game.rules.game_state()
     batched = vec._all_observations()
-    for k, lane in enumerate(vec.lanes):
-        reference = np.stack([lane.obs_builder.build(agent, lane.game_state) for agent in agents])
+    for k, game in enumerate(vec.games):
+        reference = np.stack([game.obs_builder.build(agent, game.game_state) for agent in agents])
         np.testing.assert_array_equal(batched[k], reference)
     vec.close()

@@ -139,15 +139,15 @@ def test_a_copy_does_not_take_the_recording_or_the_renderer(tmp_path):
 
 @pytest.mark.parametrize("how", ["deepcopy", "pickle"])
 def test_a_vector_env_copies_with_every_arena(how):
-    vec = VectorEnv("matches/2v2.yaml", n_arenas=3)
+    vec = VectorEnv("matches/2v2.yaml", n_games=3)
     vec.reset(seed=4)
     rng = np.random.default_rng(0)
-    shape = (vec.n_arenas, vec.n_agents) + vec.action_space.shape
+    shape = (vec.n_games, vec.n_agents) + vec.action_space.shape
     for _ in range(60):
         vec.step(rng.uniform(-1, 1, shape).astype(np.float32))
     clone = COPIERS[how](vec)
     assert clone.batch.client != vec.batch.client
-    assert all(lane.rules.arena.batch is clone.batch for lane in clone.lanes)
+    assert all(game.rules.arena.batch is clone.batch for game in clone.games)
     for t in range(200):
         actions = rng.uniform(-1, 1, shape).astype(np.float32)
         obs_a, rew_a, term_a, trunc_a, _ = vec.step(actions)
@@ -211,7 +211,7 @@ def test_torchrl_env_copies_and_multisync_collector_given_env_objects_or_factori
 
     from rocketdrl_ma.env.torchrl_env import RocketDRLTorchEnv
 
-    factory = functools.partial(RocketDRLTorchEnv, "matches/1v1.yaml", n_arenas=2, kickoff_countdown_s=0.0)
+    factory = functools.partial(RocketDRLTorchEnv, "matches/1v1.yaml", n_games=2, kickoff_countdown_s=0.0)
     env = factory()
     env.set_seed(0)
     env.rollout(7)

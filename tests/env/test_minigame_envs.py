@@ -79,7 +79,7 @@ def test_numeric_infos_keep_their_keys_and_report_success_at_the_end(config):
 
 
 def test_barrier_sensors_see_the_barrier():
-    """seed_barrier's barrier -> ball vector, and the rays' barrier class, on a barrier 700 uu in front of the ball."""
+    """barrier_sensors's barrier -> ball vector, and the rays' barrier class, on a barrier 700 uu in front of the ball."""
     env = rocketdrl_ma.parallel_env("minigames/barrier.yaml", difficulty=0.0, lift_probability=0.0)
     obs, _ = env.reset(seed=0)
     rules = env.unwrapped.rules
@@ -138,7 +138,7 @@ def test_barrier_is_rendered():
 
 
 def test_minigame_sensors_read_zeros_outside_their_minigame():
-    env = rocketdrl_ma.parallel_env("matches/1v1.yaml", kickoff_countdown_s=0.0, observation="seed_barrier+seed_aerial")
+    env = rocketdrl_ma.parallel_env("matches/1v1.yaml", kickoff_countdown_s=0.0, observation="barrier_sensors+aerial_sensors")
     obs, _ = env.reset(seed=0)
     assert env.observation_space("blue_0").shape == (21 + 22,)
     for _ in range(5):

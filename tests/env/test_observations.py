@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from rocketdrl_ma.env.observations import (ARENA_DIAGONAL, OBS_BUILDERS, CombinedObs, ObsBuilder, RaySensor,
-                                           SeedSensors, TeamRelativeObs, make_obs_builder)
+from rocketdrl_ma.env.observations import (ARENA_DIAGONAL, OBS_BUILDERS, CombinedObs, GeneralSensors, ObsBuilder,
+                                           RaySensor, TeamRelativeObs, make_obs_builder)
 from rocketdrl_ma.env.observations.rays import ray_hits_classic
 from rocketdrl_ma.physics import BallState, CarControls, CarState, get_preset, yaw_rot_mat
 from rocketdrl_ma.physics import constants as C
@@ -97,8 +97,8 @@ def scene(cars: dict, ball_pos=(0.0, 0.0, -3000.0), obstacles=(), configs=None) 
                      car_configs=dict(configs or {}))
 
 
-ALL_BUILDERS = [SeedSensors(), SeedSensors(goal_sensor=False), RaySensor(), RaySensor(n_rays=1, reach_uu=1500.0),
-                TeamRelativeObs(), CombinedObs([SeedSensors(), RaySensor(n_rays=5)])]
+ALL_BUILDERS = [GeneralSensors(), GeneralSensors(goal_sensor=False), RaySensor(), RaySensor(n_rays=1, reach_uu=1500.0),
+                TeamRelativeObs(), CombinedObs([GeneralSensors(), RaySensor(n_rays=5)])]
 
 
 # ---------------------------------------------------------------- spaces and bounds
@@ -131,7 +131,7 @@ def test_extreme_states_are_clipped_to_the_bounds_not_beyond():
 def test_team_relative_sizes():
     b = TeamRelativeObs()
     assert [b.space(n, n).shape[0] for n in (1, 2, 3, 4)] == [87, 127, 167, 207]
-    assert SeedSensors().space(2, 2).shape == (18,) and SeedSensors(goal_sensor=False).space(1, 1).shape == (15,)
+    assert GeneralSensors().space(2, 2).shape == (18,) and GeneralSensors(goal_sensor=False).space(1, 1).shape == (15,)
     assert RaySensor(n_rays=8).space(4, 4).shape == (40,)
 
 
@@ -159,7 +159,7 @@ def test_blue_and_orange_see_mirrored_states_identically(blue_size, orange_size)
     rng = np.random.default_rng(blue_size)
     b = TeamRelativeObs()
     b.space(blue_size, orange_size)
-    seed, rays = SeedSensors(), RaySensor(n_rays=6)
+    seed, rays = GeneralSensors(), RaySensor(n_rays=6)
     for _ in range(10):
         s = random_state(rng, blue_size, orange_size)
         m = mirrored_state(s)
@@ -289,7 +289,7 @@ def test_compiled_ray_hits_agree_with_marching_along_each_ray():
 # ---------------------------------------------------------------- seed sensors
 @pytest.mark.parametrize("agent", ["blue_0", "orange_0"])
 def test_seed_car_to_ball_vector_is_in_the_car_frame(agent):
-    s = SeedSensors()
+    s = GeneralSensors()
     for yaw in (0.0, 1.0, math.pi / 2, -2.5):
         car = CarState(pos=[300.0, -700.0, 17.0], rot_mat=yaw_rot_mat(yaw))
         fwd, right = car.rot_mat[:, 0], car.rot_mat[:, 1]
@@ -302,7 +302,7 @@ def test_seed_car_to_ball_vector_is_in_the_car_frame(agent):
 
 
 def test_seed_scalar_sensors():
-    s = SeedSensors()
+    s = GeneralSensors()
     car = CarState(pos=[0.0, 0.0, 17.0], vel=[-1150.0, 0.0, 0.0], rot_mat=yaw_rot_mat(0.0), boost=50.0,
                    on_ground=True, wheels_in_contact=(True, True, True, False))
     state = scene({"blue_0": car}, ball_pos=(0.0, 1000.0, 93.0))
@@ -323,7 +323,7 @@ def test_seed_scalar_sensors():
 
 
 def test_seed_euler_angles():
-    s = SeedSensors()
+    s = GeneralSensors()
     pitch = 0.4
     c, sn = math.cos(pitch), math.sin(pitch)
     rot = np.column_stack(([c, 0.0, sn], [0.0, 1.0, 0.0], [-sn, 0.0, c]))  # nose up about the right axis
@@ -338,16 +338,16 @@ def test_registry_and_combination():
     assert set(OBS_BUILDERS) == {"general_sensors", "ray", "team_relative", "barrier_sensors", "aerial_sensors",
                                  "seed_sensors", "seed_barrier", "seed_aerial"}  # the last three: old names
     assert isinstance(make_obs_builder("ray", n_rays=4), RaySensor)
-    combo = make_obs_builder("seed_sensors+ray", ray={"n_rays": 4})
+    combo = make_obs_builder("general_sensors+ray", ray={"n_rays": 4})
     assert isinstance(combo, CombinedObs) and combo.space(2, 2).shape == (18 + 20,)
     state = random_state(np.random.default_rng(5), 2, 2)
     obs = combo.build("orange_1", state)
-    np.testing.assert_array_equal(obs[:18], SeedSensors().build("orange_1", state))
+    np.testing.assert_array_equal(obs[:18], GeneralSensors().build("orange_1", state))
     np.testing.assert_array_equal(obs[18:], RaySensor(n_rays=4).build("orange_1", state))
-    with pytest.raises(ValueError, match="allowed.*seed_sensors"):
+    with pytest.raises(ValueError, match="allowed.*general_sensors"):
         make_obs_builder("lidar")
     with pytest.raises(ValueError, match="lidar"):
-        make_obs_builder("seed_sensors+lidar")
+        make_obs_builder("general_sensors+lidar")
     with pytest.raises(ValueError, match="n_ray"):
         make_obs_builder("ray", n_ray=3)
     with pytest.raises(ValueError, match="n_rays"):
@@ -364,4 +364,4 @@ def test_unknown_agent_names_are_errors():
     with pytest.raises(ValueError, match="blue_3"):
         b.build("blue_3", state)
     with pytest.raises(ValueError, match="green_0"):
-        SeedSensors().build("green_0", state)
+        GeneralSensors().build("green_0", state)

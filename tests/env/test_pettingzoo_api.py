@@ -152,7 +152,7 @@ def test_a_car_demoed_when_a_game_ends_does_not_shift_the_next_games_respawns():
 
 
 def test_observations_stay_in_their_space_for_every_builder():
-    for name in ("team_relative", "seed_sensors", "ray"):
+    for name in ("team_relative", "general_sensors", "ray"):
         env = make(2, observation=name)
         obs, _ = env.reset(seed=1)
         for _ in range(60):

@@ -80,3 +80,19 @@ def test_an_env_and_a_checkpoint_with_the_old_names_play_as_with_the_new(tmp_pat
     old_policy, new_policy = CheckpointPolicy(copy), CheckpointPolicy(shipped)
     assert type(old_policy.obs_builder) is type(new_policy.obs_builder) is GeneralSensors
     assert type(old_policy.action_parser) is type(new_policy.action_parser) is DriveActions
+
+
+def test_the_old_arena_and_lane_names_of_a_vector_env_still_work_with_a_deprecation_warning():
+    from rocketdrl_ma.env.vector_env import VectorEnv
+    with pytest.warns(DeprecationWarning, match=r"VectorEnv\(n_arenas=...\) is now VectorEnv\(n_games=...\)"):
+        vec = VectorEnv("matches/1v1.yaml", n_arenas=2, autoreset=False, kickoff_countdown_s=0.0, max_cycles=1)
+    assert vec.n_games == 2
+    for old, new in (("n_arenas", "n_games"), ("lanes", "games"), ("reset_arenas", "reset_games")):
+        with pytest.warns(DeprecationWarning, match=f"VectorEnv.{old} is now VectorEnv.{new}"):
+            assert getattr(vec, old) == getattr(vec, new)
+    vec.reset(seed=0)
+    vec.step(np.zeros((2, 2, 8), np.float32))
+    with pytest.warns(DeprecationWarning):
+        obs, infos = vec.reset_arenas(np.array([True, False]))
+    assert infos[1] is None and obs.shape[0] == 2
+    vec.close()

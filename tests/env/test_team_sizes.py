@@ -71,14 +71,14 @@ def test_max_team_size_fixes_the_layout_across_team_sizes():
 
 
 def test_vector_env_batched_observations_match_the_reference_on_unequal_teams():
-    vec = VectorEnv("matches/2v2.yaml", n_arenas=2, blue_size=1, orange_size=2, kickoff_countdown_s=0.0)
+    vec = VectorEnv("matches/2v2.yaml", n_games=2, blue_size=1, orange_size=2, kickoff_countdown_s=0.0)
     obs, _ = vec.reset(seed=4)
     for _ in range(4):
-        actions = np.stack([[vec.lanes[0].action_space(a).sample() for a in vec.possible_agents] for _ in range(2)])
+        actions = np.stack([[vec.games[0].action_space(a).sample() for a in vec.possible_agents] for _ in range(2)])
         obs, _, _, _, _ = vec.step(actions)
     reference = TeamRelativeObs()
-    for k, lane in enumerate(vec.lanes):
-        state = lane.game_state
+    for k, game in enumerate(vec.games):
+        state = game.game_state
         for j, agent in enumerate(vec.possible_agents):
             np.testing.assert_array_equal(obs[k, j], reference.build(agent, state))
     vec.close()

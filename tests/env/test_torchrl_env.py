@@ -15,7 +15,7 @@ from rocketdrl_ma.env.torchrl_env import RocketDRLTorchEnv  # noqa: E402
 
 
 def test_specs_and_a_rollout_across_episode_ends():
-    env = RocketDRLTorchEnv("matches/2v2.yaml", n_arenas=3, kickoff_countdown_s=0.0, max_cycles=5)
+    env = RocketDRLTorchEnv("matches/2v2.yaml", n_games=3, kickoff_countdown_s=0.0, max_cycles=5)
     env.set_seed(3)
     td = env.rollout(12, break_when_any_done=False)
     assert td.batch_size == (3, 12)
@@ -38,7 +38,7 @@ def test_specs_and_a_rollout_across_episode_ends():
 
 
 def test_discrete_lookup_actions_become_a_categorical_spec():
-    env = RocketDRLTorchEnv("matches/1v1.yaml", n_arenas=2, kickoff_countdown_s=0.0, action="lookup")
+    env = RocketDRLTorchEnv("matches/1v1.yaml", n_games=2, kickoff_countdown_s=0.0, action="lookup")
     check_env_specs(env)
     td = env.rollout(4)
     actions = td.get(("agents", "action"))

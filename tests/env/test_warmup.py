@@ -23,7 +23,7 @@ import rocketdrl_ma
 from rocketdrl_ma.env.vector_env import VectorEnv
 from rocketdrl_ma.physics.compile_notice import kernels_compiled
 
-vector = VectorEnv("matches/2v2.yaml", n_arenas=2, arena_shape=sys.argv[1])
+vector = VectorEnv("matches/2v2.yaml", n_games=2, arena_shape=sys.argv[1])
 vector.reset(seed=5)
 for _ in range(3):
     vector.step(np.stack([np.stack([vector.action_space.sample() for _ in range(vector.n_agents)])

@@ -8,7 +8,7 @@ import pytest
 import rocketdrl_ma
 from rocketdrl_ma.physics import BallState, CarState, yaw_rot_mat
 from rocketdrl_ma.policies.aerial_shooter import GRAVITY, AerialShooter
-from rocketdrl_ma.policies.minigame_bots import TeamView
+from rocketdrl_ma.policies.minigame_bots import CarView
 from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.scripted import SCRIPTED_BOTS
 
@@ -53,7 +53,7 @@ def test_the_plans_thrust_flies_the_car_to_the_contact_point_at_its_time(release
     """p + v T + (g + a) T^2 / 2 = c(T): the returned thrust meets the contact point at the returned time, a ball
     that hangs until its release and falls after it, within the thrust the plan allows."""
     bot = AerialShooter()
-    view = TeamView(pos=np.array([-300.0, 1800.0, 120.0]), rot=yaw_rot_mat(np.pi / 2), speed=900.0,
+    view = CarView(pos=np.array([-300.0, 1800.0, 120.0]), rot=yaw_rot_mat(np.pi / 2), speed=900.0,
                     ball=np.array([200.0, 3000.0, 700.0]), ball_vel=np.zeros(3))
     vel = np.array([0.0, 900.0, 300.0])
     t, thrust, reachable = bot.plan(view.pos, vel, view, release_in_s, bot.PLAN_ACCEL_UU_S2)

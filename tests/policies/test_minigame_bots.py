@@ -38,7 +38,7 @@ def test_barrier_shooter_scores_under_lifted_and_around_standing_barriers(action
 
 def test_barrier_shooter_needs_only_the_seed_buttons():
     """Throttle, steer, boost and handbrake: the seed's five actions carry every control it gives, unchanged."""
-    env = rocketdrl_ma.parallel_env("minigames/barrier.yaml", action="seed")
+    env = rocketdrl_ma.parallel_env("minigames/barrier.yaml", action="drive")
     bot = BarrierShooter()
     parser = env.unwrapped.action_parser
     env.reset(seed=3)

@@ -18,7 +18,7 @@ from rocketdrl_ma.policies.registry import load_policy
 from rocketdrl_ma.policies.scripted import make_scripted
 from rocketdrl_ma.policies.ppo.selfplay.imitation import collect
 
-OVERRIDES = {"action": "seed", "observation": "seed_barrier+team_relative", "rewards": {"miss": 0.0}}
+OVERRIDES = {"action": "drive", "observation": "barrier_sensors+team_relative", "rewards": {"miss": 0.0}}
 TINY = {"env_overrides": OVERRIDES, "n_envs": 2, "buffer_size": 256, "batch_size": 128, "num_epoch": 1,
         "hidden_units": 32, "max_steps": 512, "summary_freq": 256, "checkpoint_interval": 512,
         "keep_checkpoints": 1, "curriculum": {}}

@@ -82,8 +82,8 @@ def test_a_hostile_observation_is_refused_at_join_and_the_server_goes_on(running
         running.lobby.join("obs", observation={"name": "ray+ray", "ray": {"n_rays": 50}})
     assert running.lobby.inspect("obs")["slot_status"]["blue_0"]["occupant"] == "open"  # nothing was taken
     # every spec the project's configs, bots and docs use still joins
-    for spec in ("team_relative", "seed_sensors", "seed_barrier+ray", "seed_aerial+team_relative",
-                 "seed_barrier+team_relative", {"name": "ray", "n_rays": 12}):
+    for spec in ("team_relative", "general_sensors", "barrier_sensors+ray", "aerial_sensors+team_relative",
+                 "barrier_sensors+team_relative", {"name": "ray", "n_rays": 12}):
         running.lobby.join("obs", observation=spec)
     assert all(s["occupant"] == "remote" for s in running.lobby.inspect("obs")["slot_status"].values())
 
@@ -92,22 +92,22 @@ def test_a_lobby_created_match_is_held_to_the_observation_budget(running):
     with pytest.raises(ServerError, match="observation: 20480 floats a decision is over this server's limit"):
         running.lobby.create("matches/1v1.yaml", "big", overrides={"observation": HOSTILE_OBSERVATION})
     assert running.lobby.list() == []
-    running.lobby.create("minigames/barrier.yaml", "barrier", ready_timeout_s=60)  # seed_barrier+ray, its own
+    running.lobby.create("minigames/barrier.yaml", "barrier", ready_timeout_s=60)  # barrier_sensors+ray, its own
 
 
 def test_the_observation_allow_list_is_a_server_setting(tmp_path):
     with pytest.raises(ValueError, match=r"limits.observations: \['eyes'\] are not observation builders; allowed: "
                                          r"\['aerial_sensors', 'barrier_sensors', 'general_sensors', 'ray', "):
-        Limits.from_dict({"observations": ["seed_sensors", "eyes"]})
+        Limits.from_dict({"observations": ["general_sensors", "eyes"]})
     with pytest.raises(ValueError, match="limits.max_observation_rays: expected an integer >= 0"):
         Limits.from_dict({"max_observation_rays": 2.5})
-    r = Running(tmp_path, limits={"observations": ["seed_sensors", "team_relative"]})
+    r = Running(tmp_path, limits={"observations": ["general_sensors", "team_relative"]})
     try:
         r.lobby.create("matches/1v1.yaml", "m", ready_timeout_s=60)
         with pytest.raises(ServerError, match=r"observation: builder\(s\) \['ray'\] are not allowed on this server; "
-                                              r"allowed: \['seed_sensors', 'team_relative'\] \(limits.observations\)"):
-            r.lobby.join("m", observation="seed_sensors+ray")
-        assert r.lobby.join("m", observation="seed_sensors").slot == "blue_0"
+                                              r"allowed: \['general_sensors', 'team_relative'\] \(limits.observations\)"):
+            r.lobby.join("m", observation="general_sensors+ray")
+        assert r.lobby.join("m", observation="general_sensors").slot == "blue_0"
     finally:
         r.close()
 

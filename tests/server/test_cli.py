@@ -27,7 +27,7 @@ def checkpoint(tmp_path_factory) -> str:
     out = tmp_path_factory.mktemp("ckpt")
     cfg = validate_train_config({
         "env": "matches/1v1.yaml", "env_overrides": {"kickoff_countdown_s": 0.0, "clock_s": 4.0,
-                                                     "observation": "seed_sensors", "action": "seed"},
+                                                     "observation": "general_sensors", "action": "drive"},
         "n_envs": 1, "buffer_size": 128, "batch_size": 64, "num_epoch": 1, "hidden_units": 16, "max_steps": 128,
         "summary_freq": 128, "checkpoint_interval": 128, "keep_checkpoints": 1, "device": "cpu"})
     train(cfg, out=out / "tiny.pt", run_dir=out / "run", progress=False)

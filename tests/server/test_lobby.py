@@ -12,7 +12,7 @@ import pytest
 from gymnasium import spaces
 from server_helpers import SHORT, RawBot, wait_for
 
-from rocketdrl_ma.env.actions import SeedActions
+from rocketdrl_ma.env.actions import DriveActions
 from rocketdrl_ma.policies.scripted import make_scripted
 from rocketdrl_ma.results import ResultsStore
 from rocketdrl_ma.rules.state import GameState
@@ -140,9 +140,9 @@ def test_joining_slots_secrets_and_requested_formats(running):
     assert first.slot == "blue_0" and len(first.secret) == 32 and first.status == "waiting"
     assert first.keys["act"] == "rocketdrl/test/u/guest/match/m/blue_0/act"
     assert first.observation_space.shape == (127,) and first.action_space.shape == (8,)
-    named = lobby.join("m", "orange_1", observation="seed_sensors", action="lookup")
+    named = lobby.join("m", "orange_1", observation="general_sensors", action="lookup")
     assert named.slot == "orange_1" and named.observation_space.shape == (18,)
-    assert named.action_space == spaces.Discrete(90) and named.observation == {"name": "seed_sensors"}
+    assert named.action_space == spaces.Discrete(90) and named.observation == {"name": "general_sensors"}
     assert named.secret != first.secret
     with pytest.raises(ServerError, match=r"'orange_1' of match 'm' is taken; open slots: \['blue_1', 'orange_0'\]"):
         lobby.join("m", "orange_1")
@@ -203,13 +203,13 @@ class Recorder(Bot):
     """An SDK bot with its own sensors and action format (the seed's) that remembers what it saw; it
     chases the ball, answering in the seed's 5-number format."""
 
-    observation = "seed_sensors"
+    observation = "general_sensors"
     action = "seed"
     name = "recorder"
 
     def __init__(self):
         self.seen: list[tuple] = []
-        self.chaser, self.encoder = make_scripted("ball_chaser"), SeedActions()
+        self.chaser, self.encoder = make_scripted("ball_chaser"), DriveActions()
 
     def act(self, obs, info):
         self.seen.append((obs.shape, obs.dtype, info["decision"], isinstance(info["state"], GameState)))

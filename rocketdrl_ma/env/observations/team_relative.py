@@ -1,5 +1,5 @@
 """The full state from one agent's side, in its team frame (``team_relative``), one agent at a time
-(``TeamRelativeObs``) or every arena of a batch at once (``BatchedTeamRelativeObs``, bit-identical)."""
+(``TeamRelativeObs``) or every game of a batch at once (``BatchedTeamRelativeObs``, bit-identical)."""
 from __future__ import annotations
 
 import functools
@@ -103,7 +103,7 @@ class TeamRelativeObs(ObsBuilder):
         self._layouts: dict[tuple[str, int, int], tuple] = {}  # see _layout
 
     def for_batch(self, agents: list[str], blue_size: int, orange_size: int) -> BatchedTeamRelativeObs:
-        """This builder for every agent of every arena of a batch at once (``VectorEnv``)."""
+        """This builder for every agent of every game of a batch at once (``VectorEnv``)."""
         return BatchedTeamRelativeObs(self, agents, blue_size, orange_size)
 
     def slots(self, blue_size: int, orange_size: int) -> tuple[int, int]:
@@ -215,7 +215,7 @@ class TeamRelativeObs(ObsBuilder):
 
 
 class BatchedTeamRelativeObs:
-    """``TeamRelativeObs`` for ``agents`` (every car present) in all arenas of a batch: ``[n_arenas, agents, dim]``."""
+    """``TeamRelativeObs`` for ``agents`` (every car present) in all games of a batch: ``[n_games, agents, dim]``."""
 
     def __init__(self, builder: TeamRelativeObs, agents: list[str], blue_size: int, orange_size: int):
         self.agents = list(agents)
@@ -225,8 +225,8 @@ class BatchedTeamRelativeObs:
         self._column = {agent: j for j, agent in enumerate(self.agents)}
 
     def build(self, batch: ArenaBatch, car_rows: np.ndarray, states: list[GameState]) -> np.ndarray | None:
-        """Observations of arena ``k``'s agents from the batch arrays; ``car_rows[k, j]`` is the batch row of arena
-        ``k``'s car of ``agents[j]`` and ``states[k]`` that arena's state now (for score and clock). None when a car
+        """Observations of game ``k``'s agents from the batch arrays; ``car_rows[k, j]`` is the batch row of game
+        ``k``'s car of ``agents[j]`` and ``states[k]`` that game's state now (for score and clock). None when a car
         is missing from a state (then ``build`` has zeros to write: use the reference per agent)."""
         n_agents = len(self.agents)
         if any(len(state.cars) != n_agents for state in states):

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
-from rocketdrl_ma.config import load_config, load_yaml_file, resolve_shipped_path
+from rocketdrl_ma.config import load_config, load_yaml_mapping
 from rocketdrl_ma.validation import Check, Expect, OneOf, Range, load_dataclass, yaml_key
 
 from rocketdrl_ma.policies.ppo.selfplay.config import (ImitateConfig, KickstartConfig, Positive, SelfPlayConfig,
@@ -200,7 +200,4 @@ def _check_env_path(field_name: str, env: object) -> str:
 def load_train_config(path: str | Path, overrides: Mapping[str, Any] | None = None) -> TrainConfig:
     """A training YAML (resolved like env configs: as given, else the shipped one), ``overrides`` replacing its
     top-level keys."""
-    raw = load_yaml_file(resolve_shipped_path(path, "training config"), "training config") or {}
-    if not isinstance(raw, dict):
-        raise ValueError(f"training config: {path} must hold a mapping of keys to values")
-    return validate_train_config({**raw, **(overrides or {})})
+    return validate_train_config(load_yaml_mapping(path, "training config", overrides))

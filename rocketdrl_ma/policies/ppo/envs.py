@@ -77,8 +77,8 @@ class EnvPool:
     def __init__(self, config: str | dict, n_envs: int, seed: int, overrides: dict | None = None,
                  shaping: dict[str, float] | None = None, autoreset: bool = True, teacher: str | None = None):
         overrides = {**(overrides or {}), "info_format": "full"}
-        self.vec = VectorEnv(config, n_arenas=n_envs, autoreset=False, **overrides)
-        self.envs: list[LearnerGame] = self.vec.lanes
+        self.vec = VectorEnv(config, n_games=n_envs, autoreset=False, **overrides)
+        self.envs: list[LearnerGame] = self.vec.games
         first = self.envs[0]
         self.agents = list(first.possible_agents)
         self.n_rows = n_envs * len(self.agents)
@@ -140,7 +140,7 @@ class EnvPool:
         return self._reset_ended(np.array(obs, copy=True), np.asarray(ended, bool))
 
     def _reset_ended(self, obs: np.ndarray, ended: np.ndarray) -> np.ndarray:
-        new_obs, _ = self.vec.reset_arenas(ended)
+        new_obs, _ = self.vec.reset_games(ended)
         for i in np.flatnonzero(ended):
             rows = self._rows(int(i))
             obs[rows] = new_obs[i]

@@ -113,7 +113,7 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
         raise ValueError(f"side: expected one of {list(TEAMS)}, got {side!r}")
     if episodes < 1:
         raise ValueError(f"episodes: must be >= 1, got {episodes}")
-    vec = VectorEnv(config, n_arenas=n_envs, autoreset=False,
+    vec = VectorEnv(config, n_games=n_envs, autoreset=False,
                     **{**overrides, "info_format": "full"})
     try:
         mine = [a for a in vec.possible_agents if a.startswith(side)]
@@ -135,7 +135,7 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
         returns, lengths = np.zeros(n_envs), np.zeros(n_envs, np.int64)
         columns = [vec.possible_agents.index(a) for a in mine]
         while any(quota):
-            controls = cars_controls([(players[k][a], a, lane.game_state) for k, lane in enumerate(vec.lanes)
+            controls = cars_controls([(players[k][a], a, lane.game_state) for k, lane in enumerate(vec.games)
                                       for a in vec.possible_agents])
             n_agents = len(vec.possible_agents)
             _, rewards, terminated, truncated, infos = vec.step(None, [
@@ -151,7 +151,7 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
                     finished.append((winner == side, float(returns[k]), int(lengths[k])))
                     outcomes.append(episode_outcomes(mine[0], infos[k][mine[0]]))
             if ended.any():
-                vec.reset_arenas(ended)
+                vec.reset_games(ended)
                 _begin(vec, players, np.flatnonzero(ended))
                 returns[ended], lengths[ended] = 0.0, 0
     finally:
@@ -163,6 +163,6 @@ def play_against(config: str | dict, overrides: dict, side: str, player: Callabl
 
 def _begin(vec: VectorEnv, players: list[dict[str, Policy]], copies) -> None:
     for k in copies:
-        state = vec.lanes[int(k)].game_state
+        state = vec.games[int(k)].game_state
         for policy in players[int(k)].values():
             policy.reset(state)

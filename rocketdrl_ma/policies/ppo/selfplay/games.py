@@ -30,7 +30,7 @@ SELF = 0  # the opponent index of the learner itself
 
 
 @dataclass
-class MatchResult:
+class EpisodeOutcome:
     """A finished episode of one copy, for the learner's PFSP bookkeeping."""
 
     copy: int
@@ -44,8 +44,8 @@ class SelfPlayGames:
     def __init__(self, cfg: TrainConfig, n_copies: int, first_copy: int = 0):
         self.cfg, self.sp = cfg, cfg.selfplay
         overrides = {**cfg.env_overrides, "info_format": "full"}
-        self.vec = VectorEnv(cfg.env, n_arenas=n_copies, autoreset=False, **overrides)
-        self.envs = self.vec.lanes
+        self.vec = VectorEnv(cfg.env, n_games=n_copies, autoreset=False, **overrides)
+        self.envs = self.vec.games
         first = self.envs[0]
         self.agents = list(self.vec.possible_agents)
         self.team_agents = {t: [a for a in self.agents if a.startswith(t)] for t in TEAMS}
@@ -122,7 +122,7 @@ class SelfPlayGames:
     def reset_copies(self, ended: np.ndarray, obs: np.ndarray | None = None) -> np.ndarray:
         """Start the next episode of the copies flagged in ``ended``; every learner row's observation (``obs``,
         the rows' last observations, is not needed: the games hold every car's)."""
-        new_obs, _ = self.vec.reset_arenas(np.asarray(ended, bool))
+        new_obs, _ = self.vec.reset_games(np.asarray(ended, bool))
         for i in np.flatnonzero(ended):
             self._obs[i] = new_obs[i]
             self._start_episode(int(i))
@@ -137,7 +137,7 @@ class SelfPlayGames:
         return np.asarray(labels)
 
     def step(self, learner_actions: np.ndarray,
-             opponent_actions: np.ndarray) -> tuple[StepResult, list[MatchResult], np.ndarray]:
+             opponent_actions: np.ndarray) -> tuple[StepResult, list[EpisodeOutcome], np.ndarray]:
         """One decision. ``opponent_actions`` [rows, ...] are used for copies whose opponent is a network (the
         learner itself or a snapshot); scripted opponents act here. Ended copies keep their final observation
         until ``reset_copies``. Also returns [copies, 2]: goals for and against the learner's team."""
@@ -160,7 +160,7 @@ class SelfPlayGames:
         reward = np.zeros(self.n_rows, np.float32)
         shaping = np.zeros(self.n_rows, np.float32)
         episodes: list[Episode] = []
-        results: list[MatchResult] = []
+        results: list[EpisodeOutcome] = []
         goals = np.zeros((len(self.envs), 2), np.int64)
         ended = term | trunc
         for i in range(len(self.envs)):
@@ -178,7 +178,7 @@ class SelfPlayGames:
                 points = 0.5 if winner is None else float(winner == team)
                 metrics = (team_log_vector(summary["team"][team]) if "team" in summary
                            else [float("nan")] * len(TEAM_LOG_METRICS))
-                results.append(MatchResult(i, self.opponent[i], self.generation[i], points, metrics))
+                results.append(EpisodeOutcome(i, self.opponent[i], self.generation[i], points, metrics))
                 for k in range(self.team_size):
                     row = rows.start + k
                     episodes.append(Episode(float(self._returns[row] + reward[row]), int(self._lengths[row] + 1),
