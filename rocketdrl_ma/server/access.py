@@ -50,17 +50,12 @@ def read_users_file(path: str | Path) -> dict[str, str]:
 def add_missing_users(path: str | Path, users: list[str]) -> list[str]:
     """Give every user of ``users`` without a password in ``path`` a random one (the file is created readable by
     its owner only); the users added."""
-    from .crypto import write_private
+    from .crypto import append_private
     p = Path(path)
     existing = read_users_file(p) if p.is_file() else {}
     missing = [u for u in users if u not in existing]
     if missing:
-        lines = "".join(f"{u}:{secrets.token_urlsafe(24)}\n" for u in missing)
-        if p.is_file():
-            with open(p, "a") as f:
-                f.write(lines)
-        else:
-            write_private(p, lines.encode())
+        append_private(p, "".join(f"{u}:{secrets.token_urlsafe(24)}\n" for u in missing).encode())
     return missing
 
 

@@ -89,6 +89,15 @@ def write_private(path: Path, data: bytes) -> None:
         f.write(data)
 
 
+def append_private(path: Path, data: bytes) -> None:
+    """Append ``data`` to ``path``, creating it readable by its owner only if it does not exist yet."""
+    if path.is_file():
+        with open(path, "ab") as f:
+            f.write(data)
+    else:
+        write_private(path, data)
+
+
 def read_secret_file(path: str | Path, field: str) -> bytes:
     p = Path(path)
     if not p.is_file():

@@ -25,7 +25,7 @@ from cryptography.hazmat.primitives.asymmetric.ed25519 import Ed25519PublicKey
 
 from rocketdrl_ma.validation import check_name
 
-from .crypto import ServerIdentity, parse_public_key, public_key_text, write_private
+from .crypto import ServerIdentity, append_private, parse_public_key, public_key_text, write_private
 from .protocol import ProtocolError, pack, unpack, unpack_map
 from .settings import MEMBERS_DIR, MEMBERS_USER
 
@@ -105,12 +105,7 @@ def add_member(key_dir: str | Path, name: str, role: str, reserved: tuple[str, .
     if key_path.exists():
         raise ValueError(f"user: {key_path} already exists; remove it to make a new key")
     identity = ServerIdentity.load_or_create(key_path)
-    line = f"{name} {role} {identity.public_text}\n"
-    if register.is_file():
-        with open(register, "a") as f:
-            f.write(line)
-    else:
-        write_private(register, line.encode())
+    append_private(register, f"{name} {role} {identity.public_text}\n".encode())
     return key_path
 
 
