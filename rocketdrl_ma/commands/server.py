@@ -1,4 +1,6 @@
-"""``rocketdrl-ma serve | bot | watch | lobby | router | keys | users`` (standard library at the top: ``--help`` stays fast)."""
+"""``rocketdrl-ma serve | bot | watch | lobby | router | keys | users``.
+
+The standard library at the top only, so that ``--help`` stays fast."""
 from __future__ import annotations
 
 import argparse
