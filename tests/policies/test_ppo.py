@@ -21,7 +21,8 @@ from rocketdrl_ma.policies.ppo.envs import EnvPool, episode_outcomes
 from rocketdrl_ma.policies.ppo.evaluate import count_outcomes, evaluate
 from rocketdrl_ma.policies.ppo.model import PPOModel
 from rocketdrl_ma.rules.rewards import BallToGoalDistance, CarToBallDistance
-from rocketdrl_ma.policies.ppo.trainer import make_loss, ppo_update
+from rocketdrl_ma.policies.ppo import trainer
+from rocketdrl_ma.policies.ppo.trainer import RunClock, make_loss, ppo_update
 from rocketdrl_ma.policies.base import ObservingPolicy
 from rocketdrl_ma.policies.registry import load_policy
 
@@ -50,7 +51,7 @@ def test_unknown_and_bad_keys_are_named():
 
 
 @pytest.mark.slow
-def test_short_training_run_writes_a_checkpoint_that_loads_acts_and_resumes(tmp_path):
+def test_short_training_run_writes_a_checkpoint_that_loads_acts_and_resumes(tmp_path, monkeypatch):
     cfg_path = tmp_path / "tiny.yaml"
     cfg_path.write_text(json.dumps(TINY))  # JSON is YAML
     out = tmp_path / "tiny.pt"
@@ -86,12 +87,14 @@ def test_short_training_run_writes_a_checkpoint_that_loads_acts_and_resumes(tmp_
     meta = json.loads((tmp_path / "tiny.json").read_text())
     meta["metrics"]["train_seconds"] = 7200.0
     (tmp_path / "tiny.json").write_text(json.dumps(meta))
+    # this session's own time held at zero: what is checked is the carried-over 7200 s, not a measured duration
+    monkeypatch.setattr(trainer, "RunClock", lambda seconds_before: RunClock(seconds_before, now=lambda: 0.0))
     resumed = train(validate_train_config({**TINY, "max_steps": 3072}), out=tmp_path / "more.pt",
                     run_dir=tmp_path / "run2", resume=out, progress=False)
     assert resumed.agent_steps == 3072
     assert [h[0] for h in resumed.history] == [3072]
     assert json.loads((tmp_path / "more.json").read_text())["agent_steps"] == 3072
-    assert json.loads((tmp_path / "more.json").read_text())["metrics"]["train_seconds"] >= 7200.0
+    assert json.loads((tmp_path / "more.json").read_text())["metrics"]["train_seconds"] == 7200.0
     more, _ = load_model(tmp_path / "more.pt")
     assert torch.equal(more.obs_norm.count, model.obs_norm.count + 1024)
 
@@ -223,3 +226,11 @@ def test_registry_does_not_import_torch_until_a_checkpoint_loads():
     code = "import sys, rocketdrl_ma.policies.registry, rocketdrl_ma.cli; print('torch' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
+
+
+def test_a_runs_clock_adds_this_sessions_time_to_the_earlier_sessions():
+    ticks = iter([100.0, 130.0, 145.5])  # the session starts at 100 on its clock
+    clock = RunClock(7200.0, now=lambda: next(ticks))
+    assert clock.seconds() == 7230.0
+    assert clock.seconds() == 7245.5
+    assert RunClock(now=lambda: 5.0).seconds() == 0.0

@@ -16,6 +16,7 @@ import threading
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import torch
@@ -122,6 +123,21 @@ class Probe:
             env.close()
 
 
+@dataclass
+class RunClock:
+    """A run's training time: what its earlier sessions trained (from the checkpoint it resumes) plus this session's
+    time on the ``now`` clock."""
+
+    seconds_before: float = 0.0
+    now: Callable[[], float] = time.monotonic
+
+    def __post_init__(self) -> None:
+        self._session_start = self.now()
+
+    def seconds(self) -> float:
+        return self.seconds_before + self.now() - self._session_start
+
+
 def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | Path | None = None,
           progress: bool = True, watch=None, workers: WorkerPlan | None = None) -> TrainResult:
     """Train until ``cfg.max_steps`` agent steps; write the final checkpoint to ``out``.
@@ -198,10 +214,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
     iteration, env_config = 0, wcfg.env
     bar = tqdm(total=cfg.max_steps, initial=agent_steps, unit="step", disable=not progress, dynamic_ncols=True)
     start_time, start_steps, busy_learning, env_cpu_s = None, agent_steps, 0.0, 0.0
-    session_start = time.monotonic()
-
-    def train_seconds() -> float:
-        return seconds_before + time.monotonic() - session_start
+    run_clock = RunClock(seconds_before)
 
     stop = StopRequest()
     try:
@@ -248,7 +261,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             loss_history.append(losses)
             policy.version += 1
             if opponents is not None:
-                opponents.on_update(model, agent_steps, writer, train_seconds())
+                opponents.on_update(model, agent_steps, writer, run_clock.seconds())
             iteration += 1
             if watch is not None and watch.due(iteration):
                 watch.publish(iteration, ModelPolicy(model, env_config))
@@ -287,7 +300,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
             if agent_steps >= next_checkpoint:
                 _periodic_checkpoint(run_dir, model, optimizer, cfg, probe.obs_dim, agent_steps,
                                      {"train_success_rate": success, "train_mean_return": ret,
-                                      "train_seconds": train_seconds()}, difficulty)
+                                      "train_seconds": run_clock.seconds()}, difficulty)
                 next_checkpoint += cfg.checkpoint_interval
     finally:
         stop.restore()
@@ -298,7 +311,7 @@ def train(cfg: TrainConfig, out: str | Path, run_dir: str | Path, resume: str | 
         if writer is not None:
             writer.close()
     success, ret = _episode_stats(recent)
-    metrics = {"train_success_rate": success, "train_mean_return": ret, "train_seconds": train_seconds(), **losses}
+    metrics = {"train_success_rate": success, "train_mean_return": ret, "train_seconds": run_clock.seconds(), **losses}
     meta = checkpoint_meta(cfg, model, probe.obs_dim, agent_steps, metrics, difficulty)
     path = save_checkpoint(out, model, meta, optimizer)
     return TrainResult(path, agent_steps, history, loss_history, lags, *speed,
