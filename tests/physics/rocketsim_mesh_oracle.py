@@ -59,6 +59,16 @@ def mesh_folder_or_none() -> str | None:
     return None if folder is None else str(folder)
 
 
+def mesh_folder_or_skip() -> str:
+    """The installed collision mesh folder; skips the calling test without RocketSim or the meshes."""
+    import pytest
+    pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
+    folder = mesh_folder_or_none()
+    if folder is None:
+        pytest.skip("rlgym-rocket-league's collision meshes are not installed")
+    return folder
+
+
 def ball_trajectories_on_meshes(scenes: list[BallScene], mesh_folder: str | None = None) -> list[BallTrajectory]:
     """Each scene run on RocketSim with the real arena meshes (in a subprocess; see the module docstring).
     ``mesh_folder`` defaults to the installed ``rlgym-rocket-league``'s; ValueError if there is none."""

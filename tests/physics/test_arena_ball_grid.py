@@ -8,7 +8,7 @@ import pytest
 
 import arena_ball_scenes as grid
 from bullet_triangle_contacts import TriangleContacts, manifold_normals, velocity_after_contact
-from rocketsim_mesh_oracle import ball_trajectories_on_meshes, mesh_folder_or_none
+from rocketsim_mesh_oracle import ball_trajectories_on_meshes, mesh_folder_or_skip
 
 pytestmark = pytest.mark.slow  # one RocketSim subprocess for the 720 scenes, then the same in ours
 
@@ -21,10 +21,7 @@ CELLS = list(dict.fromkeys(grid.cell_of(s.key) for s in SCENES))
 @pytest.fixture(scope="module")
 def meshes():
     """The collision mesh folder RocketSim loads (skips without RocketSim or the meshes)."""
-    pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
-    folder = mesh_folder_or_none()
-    if folder is None:
-        pytest.skip("rlgym-rocket-league's collision meshes are not installed")
+    folder = mesh_folder_or_skip()
     return folder
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from rocketdrl_ma import physics
-from rocketsim_mesh_oracle import TICK_RATE, BallScene, ball_trajectories_on_meshes, mesh_folder_or_none
+from rocketsim_mesh_oracle import TICK_RATE, BallScene, ball_trajectories_on_meshes, mesh_folder_or_skip
 
 SPEED_TOLERANCE = 0.05  # issue 49's target: outgoing speed within 5 % and direction within 2 degrees
 ANGLE_TOLERANCE_DEG = 2.0
@@ -65,10 +65,7 @@ def test_zero_g_ball_off_the_game_shaped_arena(name):
 def _assert_outgoing_velocity_as_rocketsims(scene: BallScene, arena_shape: str, name: str) -> None:
     """The ball's velocity after the scene, in our arena of ``arena_shape`` and in RocketSim on the meshes: the same
     speed within SPEED_TOLERANCE and direction within ANGLE_TOLERANCE_DEG."""
-    pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
-    folder = mesh_folder_or_none()
-    if folder is None:
-        pytest.skip("rlgym-rocket-league's collision meshes are not installed")
+    folder = mesh_folder_or_skip()
     (theirs,) = ball_trajectories_on_meshes([scene], folder)
     game, ours = theirs.vel[-1], _ours(scene, arena_shape)
     print(f"{name}: RocketSim on the meshes {np.round(game, 1)}, ours {np.round(ours, 1)}")

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from rocketdrl_ma import physics
-from rocketsim_mesh_oracle import TICK_RATE, CarScene, car_trajectories_on_meshes, mesh_folder_or_none
+from rocketsim_mesh_oracle import TICK_RATE, CarScene, car_trajectories_on_meshes, mesh_folder_or_skip
 
 pytestmark = pytest.mark.slow  # one RocketSim subprocess for the grid, then 1 s per scene in ours
 
@@ -51,10 +51,7 @@ def _ours(scene: CarScene) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def rocketsim_paths():
-    pytest.importorskip("RocketSim", reason="the rocketsim package (test extra) is the physics oracle")
-    folder = mesh_folder_or_none()
-    if folder is None:
-        pytest.skip("rlgym-rocket-league's collision meshes are not installed")
+    folder = mesh_folder_or_skip()
     return dict(zip(SCENES, (t.pos for t in car_trajectories_on_meshes(list(SCENES.values()), folder))))
 
 
